@@ -1,0 +1,80 @@
+// Accel: the embeddable kernel. Holds triangles and polygons, builds one BVH per
+// primitive kind at commit (none for a kind the scene lacks), answers queries.
+#include "volley/accel.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+
+Accel::Accel() : impl_(std::make_unique<Impl>()) {}
+Accel::~Accel() = default;
+Accel::Accel(Accel&&) noexcept = default;
+Accel& Accel::operator=(Accel&&) noexcept = default;
+
+std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
+                                   const std::uint32_t* indices, std::size_t triangle_count) {
+  for (std::size_t i = 0; i < 3 * vertex_count; ++i)
+    if (!std::isfinite(xyz[i]))
+      throw Error("add_triangles: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+  const std::uint32_t first = impl_->next_id;
+  auto& tris = impl_->triangles;
+  tris.reserve(tris.size() + 3 * triangle_count);
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t idx = indices[3 * t + k];
+      if (idx >= vertex_count)
+        throw Error("add_triangles: triangle " + std::to_string(t) + " uses vertex index " +
+                    std::to_string(idx) + ", but there are only " + std::to_string(vertex_count) +
+                    " vertices");
+      tris.emplace_back(xyz[3 * idx], xyz[3 * idx + 1], xyz[3 * idx + 2]);
+    }
+    impl_->triangle_ids.push_back(impl_->next_id++);
+  }
+  impl_->committed = false;
+  return first;
+}
+
+std::uint32_t Accel::add_polygon(const float* xyz, std::size_t vertex_count) {
+  std::vector<glm::vec3> verts(vertex_count);
+  for (std::size_t i = 0; i < vertex_count; ++i) verts[i] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+  try {
+    impl_->polygons.push_back(core::make_polygon(std::move(verts)));
+  } catch (const std::invalid_argument& e) {
+    throw Error(std::string("add_polygon: ") + e.what());
+  }
+  impl_->polygon_ids.push_back(impl_->next_id);
+  impl_->committed = false;
+  return impl_->next_id++;
+}
+
+void Accel::commit(const Options& options) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    impl_->isa = simd::resolve_isa(options.isa);
+  } catch (const std::invalid_argument& e) {
+    throw Error(e.what());
+  }
+  impl_->test = options.test;
+  impl_->build();
+  impl_->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  impl_->committed = true;
+}
+
+Hit Accel::intersect(const Ray& ray) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  return impl_->intersect(ray);
+}
+
+bool Accel::occluded(const Ray& ray) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  return impl_->occluded(ray);
+}
+
+AccelInfo Accel::info() const { return impl_->info(); }
+
+}  // namespace volley

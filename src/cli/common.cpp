@@ -1,0 +1,45 @@
+#include "cli/common.h"
+
+#include <cstdlib>
+#include <vector>
+
+#include <unistd.h>
+
+namespace volley::cli {
+
+void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
+  cmd.add_option("--test", args.test, "Ray/triangle test: plane (notes' algorithm 1), moller (algorithm 2), watertight")
+      ->check(CLI::IsMember({"plane", "moller", "watertight"}))
+      ->capture_default_str();
+  cmd.add_option("--isa", args.isa, "Kernel instruction set (VOLLEY_ISA also sets it)")
+      ->check(CLI::IsMember({"auto", "scalar", "sse4.2", "avx2", "avx512"}))
+      ->capture_default_str();
+  cmd.add_option("--scenes", args.scenes,
+                 "Folder of shared benchmark meshes (${scenes}/ in scene files); default $VOLLEY_SCENES or ../shared/scenes");
+}
+
+Options kernel_options(const KernelArgs& args) {
+  Options o;
+  o.test = *parse_triangle_test(args.test);
+  o.isa = *parse_isa(args.isa);
+  return o;
+}
+
+std::filesystem::path shared_scenes_dir(const std::string& flag) {
+  namespace fs = std::filesystem;
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("VOLLEY_SCENES"); env && *env) return env;
+  std::vector<fs::path> candidates = {fs::current_path() / ".." / "shared" / "scenes"};
+  char exe[4096];
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+  if (n > 0) {
+    exe[n] = '\0';
+    // build/release/volley -> <project>/../shared/scenes
+    candidates.push_back(fs::path(exe).parent_path() / ".." / ".." / ".." / "shared" / "scenes");
+  }
+  for (const auto& c : candidates)
+    if (fs::is_directory(c)) return fs::weakly_canonical(c);
+  return candidates.front();
+}
+
+}  // namespace volley::cli

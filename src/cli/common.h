@@ -1,0 +1,29 @@
+// Pieces shared by the volley subcommands.
+#pragma once
+#include <filesystem>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "volley/options.h"
+
+namespace volley::cli {
+
+/// Options every tracing subcommand takes (--test, --isa, --scenes).
+struct KernelArgs {
+  std::string test = "watertight";
+  std::string isa = "auto";
+  std::string scenes;  ///< folder of shared meshes for ${scenes}/ paths in scene files
+};
+
+/// Registers --test, --isa and --scenes on a subcommand.
+void add_kernel_options(CLI::App& cmd, KernelArgs& args);
+
+/// The Accel options the arguments name (validated by CLI11 already).
+Options kernel_options(const KernelArgs& args);
+
+/// Where ${scenes}/ points: --scenes, else VOLLEY_SCENES, else ../shared/scenes beside the
+/// project (found from the working directory or from the executable's location).
+std::filesystem::path shared_scenes_dir(const std::string& flag);
+
+}  // namespace volley::cli

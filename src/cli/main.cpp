@@ -1,0 +1,37 @@
+// volley: command-line front end. Each subcommand lives in its own file (cmd_*.cpp).
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/commands.h"
+#include "io/load_error.h"
+#include "volley/accel.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "volley: a data-oriented SIMD packet ray tracer.\n"
+      "SCENE is a .json scene (see README) or a mesh (.obj/.ply, which gets an automatic\n"
+      "camera, light and material). Examples:\n"
+      "  volley render scenes/cornell.json -o out/cornell.png --spp 16\n"
+      "  volley render scenes/cornell.json --integrator path --spp 64\n"
+      "  volley info ../shared/scenes/sponza_dabrovic.obj"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "volley 0.1.0");
+  volley::cli::register_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return volley::cli::run_selected(app);
+  } catch (const volley::io::LoadError& e) {
+    std::fprintf(stderr, "volley: error: %s\n", e.what());
+  } catch (const volley::Error& e) {
+    std::fprintf(stderr, "volley: error: %s\n", e.what());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "volley: error: %s\n", e.what());
+  }
+  return 1;
+}

@@ -1,0 +1,87 @@
+// A scene as plain data, exactly as read from a .json scene or a bare mesh: no
+// acceleration structure, no derived quantities. Loaders fill it; the renderer reads it.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace volley::io {
+
+/// Camera in either form the scene file allows. The renderer builds the notes' camera
+/// (eye, u v w basis, focal distance f, window wl wr wt wb) from it.
+struct CameraDesc {
+  enum class Kind { notes, look_at };
+  Kind kind = Kind::look_at;
+  glm::vec3 eye{0, 0, 0};
+  // look_at form
+  glm::vec3 target{0, 0, -1};
+  glm::vec3 up{0, 1, 0};
+  float fov_deg = 45.0f;  ///< vertical field of view
+  // notes form: image plane at eye + f w, window in camera coordinates
+  glm::vec3 u{1, 0, 0}, v{0, 1, 0}, w{0, 0, -1};
+  float f = 1.0f;
+  float wl = -1, wr = 1, wt = 1, wb = -1;
+};
+
+/// Phong material with the notes' global terms. Colours are linear RGB in [0, 1]
+/// (emission may exceed 1).
+struct Material {
+  std::string name;
+  glm::vec3 ambient{0.1f};
+  glm::vec3 diffuse{0.7f};
+  glm::vec3 specular{0.0f};
+  float shininess = 32.0f;
+  glm::vec3 mirror{0.0f};         ///< mirror reflectance
+  glm::vec3 transmittance{0.0f};  ///< refracted fraction (glass: near 1)
+  float ior = 1.0f;               ///< index of refraction inside the surface
+  glm::vec3 emission{0.0f};
+};
+
+/// Point light; intensity is radiant intensity per colour channel (falls off as 1/d^2).
+struct PointLight {
+  glm::vec3 position{0.0f};
+  glm::vec3 intensity{1.0f};
+};
+
+/// All triangles of the scene merged in one indexed mesh (object transforms applied),
+/// in file order: triangle i of this mesh is prim id i.
+struct MeshDesc {
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;        ///< 3 per triangle
+  std::vector<std::uint32_t> material;       ///< 1 per triangle, index into SceneDesc::materials
+  std::vector<glm::vec3> corner_normals;     ///< 3 per triangle, or empty (use geometric normals)
+  std::size_t triangle_count() const { return indices.size() / 3; }
+};
+
+/// A planar polygon (convex or concave) given by its boundary in order.
+struct PolygonDesc {
+  std::string name;
+  std::vector<glm::vec3> vertices;
+  std::uint32_t material = 0;
+};
+
+/// Render settings a scene may carry; command-line options override them.
+struct RenderSettings {
+  int width = 512;
+  int height = 512;
+  int spp = 1;
+  int max_depth = 5;
+  std::string integrator = "whitted";  ///< "whitted" or "path"
+  glm::vec3 background{0.0f};
+  std::uint64_t seed = 1;
+};
+
+struct SceneDesc {
+  std::string source;      ///< file it came from (for messages)
+  bool has_camera = false; ///< false: the renderer frames the bounds automatically
+  CameraDesc camera;
+  RenderSettings settings;
+  std::vector<Material> materials;  ///< never empty after loading (a default is added)
+  std::vector<PointLight> lights;
+  MeshDesc mesh;
+  std::vector<PolygonDesc> polygons;
+};
+
+}  // namespace volley::io

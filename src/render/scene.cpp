@@ -1,0 +1,136 @@
+#include "render/scene.h"
+
+#include <cmath>
+#include <limits>
+
+#include "render/spawn.h"
+
+namespace volley::render {
+namespace {
+
+struct Bounds {
+  glm::vec3 lo{std::numeric_limits<float>::infinity()};
+  glm::vec3 hi{-std::numeric_limits<float>::infinity()};
+  void extend(const glm::vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+};
+
+Bounds scene_bounds(const io::SceneDesc& desc) {
+  Bounds b;
+  for (const auto& p : desc.mesh.positions) b.extend(p);
+  for (const auto& poly : desc.polygons)
+    for (const auto& p : poly.vertices) b.extend(p);
+  return b;
+}
+
+// The notes' camera from the description, or one framing the bounds from the front
+// (+z side, slightly above) for a bare mesh.
+core::Camera make_camera(const io::SceneDesc& desc, const Bounds& b, int width, int height) {
+  const io::CameraDesc& c = desc.camera;
+  if (desc.has_camera && c.kind == io::CameraDesc::Kind::notes)
+    return core::Camera(c.eye, c.u, c.v, c.w, c.f, c.wl, c.wr, c.wt, c.wb, width, height);
+  if (desc.has_camera) return core::Camera::look_at(c.eye, c.target, c.up, c.fov_deg, width, height);
+  const glm::vec3 center = 0.5f * (b.lo + b.hi);
+  const float radius = std::max(0.5f * glm::length(b.hi - b.lo), 1e-6f);
+  const float fov = 40.0f;
+  const float distance = radius / std::sin(glm::radians(fov) * 0.5f) * 1.05f;
+  const glm::vec3 dir = glm::normalize(glm::vec3(0.35f, 0.3f, 1.0f));
+  return core::Camera::look_at(center + dir * distance, center, {0, 1, 0}, fov, width, height);
+}
+
+}  // namespace
+
+Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& options)
+    : camera_(make_camera(desc, scene_bounds(desc), width, height)),
+      materials_(desc.materials),
+      lights_(desc.lights),
+      background_(desc.settings.background),
+      positions_(desc.mesh.positions),
+      indices_(desc.mesh.indices),
+      tri_material_(desc.mesh.material),
+      corner_normals_(desc.mesh.corner_normals) {
+  if (materials_.empty()) materials_.push_back(io::Material{"default"});
+  const Bounds b = scene_bounds(desc);
+  extent_ = std::max(glm::length(b.hi - b.lo), 1e-6f);
+  if (lights_.empty() && !desc.has_camera) {
+    // A bare mesh: one light over the camera's shoulder, bright enough at the mesh.
+    const glm::vec3 center = 0.5f * (b.lo + b.hi);
+    const glm::vec3 pos = camera_.eye() + glm::vec3(0.0f, 0.5f * extent_, 0.0f);
+    const float d = glm::length(pos - center);
+    lights_.push_back({pos, glm::vec3(d * d)});
+  }
+
+  if (!positions_.empty())
+    accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data(), indices_.size() / 3);
+  for (const auto& poly : desc.polygons) {
+    try {
+      accel_.add_polygon(&poly.vertices[0].x, poly.vertices.size());
+    } catch (const Error& e) {
+      throw Error("polygon '" + poly.name + "': " + e.what());
+    }
+    // Newell's normal of the boundary; add_polygon has checked planarity and area.
+    glm::dvec3 n(0.0);
+    const auto& v = poly.vertices;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const glm::dvec3 a(v[i]), c(v[(i + 1) % v.size()]);
+      n += glm::dvec3((a.y - c.y) * (a.z + c.z), (a.z - c.z) * (a.x + c.x), (a.x - c.x) * (a.y + c.y));
+    }
+    const glm::vec3 unit(glm::normalize(n));
+    glm::dvec3 centroid(0.0);
+    for (const auto& p : v) centroid += glm::dvec3(p);
+    centroid /= double(v.size());
+    polygons_.push_back({unit, float(glm::dot(glm::dvec3(unit), centroid)), poly.material});
+  }
+  accel_.commit(options);
+
+  features_.lights = !lights_.empty();
+  features_.polygons = !polygons_.empty();
+  features_.smooth_normals = !corner_normals_.empty();
+  for (const auto& m : materials_) {
+    features_.mirrors |= glm::length(m.mirror) > 0.0f;
+    features_.refraction |= glm::length(m.transmittance) > 0.0f;
+    features_.emission |= glm::length(m.emission) > 0.0f;
+  }
+}
+
+SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
+  SurfacePoint s;
+  const glm::vec3 dir(ray.dir[0], ray.dir[1], ray.dir[2]);
+  const std::size_t tri_count = indices_.size() / 3;
+  if (hit.prim < tri_count) {
+    const std::uint32_t* idx = &indices_[3 * hit.prim];
+    const glm::vec3 &p0 = positions_[idx[0]], &p1 = positions_[idx[1]], &p2 = positions_[idx[2]];
+    const float b0 = 1.0f - hit.u - hit.v;
+    // Hit point from barycentrics, with pbrt's error bound (Pharr et al., 4th ed., 6.8).
+    s.p = b0 * p0 + hit.u * p1 + hit.v * p2;
+    s.p_error = gamma(7) * (glm::abs(b0 * p0) + glm::abs(hit.u * p1) + glm::abs(hit.v * p2));
+    s.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+    if (!corner_normals_.empty()) {
+      const glm::vec3* n = &corner_normals_[3 * hit.prim];
+      s.ns = b0 * n[0] + hit.u * n[1] + hit.v * n[2];
+      const float len = glm::length(s.ns);
+      s.ns = len > 0.0f ? s.ns / len : s.ng;
+    } else {
+      s.ns = s.ng;
+    }
+    s.material = tri_material_[hit.prim];
+  } else {
+    const PolygonShading& poly = polygons_[hit.prim - tri_count];
+    const glm::vec3 org(ray.org[0], ray.org[1], ray.org[2]);
+    const glm::vec3 p = org + hit.t * dir;
+    // Project onto the plane: the bound then only covers the plane equation's rounding.
+    s.p = p - (glm::dot(poly.normal, p) - poly.d) * poly.normal;
+    s.p_error = gamma(8) * (glm::abs(s.p) + glm::vec3(std::abs(poly.d)));
+    s.ng = s.ns = poly.normal;
+    s.material = poly.material;
+  }
+  // Face the normals toward the incoming ray; remember which side was hit (for refraction).
+  s.front = glm::dot(s.ng, dir) < 0.0f;
+  if (!s.front) s.ng = -s.ng;
+  if (glm::dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns;
+  return s;
+}
+
+}  // namespace volley::render

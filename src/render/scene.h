@@ -1,0 +1,76 @@
+// The renderer's view of a scene: the committed Accel plus what shading needs (materials,
+// lights, per-primitive normals) and the camera. Built once from a SceneDesc.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/camera.h"
+#include "io/scene_desc.h"
+#include "volley/accel.h"
+
+namespace volley::render {
+
+/// What the scene contains, so the renderer can skip the rest (--stats prints it).
+struct SceneFeatures {
+  bool lights = false;      ///< point lights present: shadow rays needed
+  bool mirrors = false;     ///< a material with mirror reflectance
+  bool refraction = false;  ///< a material with transmittance
+  bool emission = false;    ///< an emissive material
+  bool polygons = false;
+  bool smooth_normals = false;  ///< per-corner normals to interpolate
+};
+
+/// A surface point ready for shading.
+struct SurfacePoint {
+  glm::vec3 p;           ///< hit point, from barycentrics (triangles) or the plane (polygons)
+  glm::vec3 p_error;     ///< absolute error bound of p per axis
+  glm::vec3 ng;          ///< unit geometric normal, facing the incoming ray
+  glm::vec3 ns;          ///< unit shading normal, same hemisphere as ng
+  bool front = true;     ///< the ray hit the side the geometric normal points to (outside)
+  std::uint32_t material = 0;
+};
+
+class Scene {
+ public:
+  /// Builds from a loaded description. `width`/`height` size the camera; a description
+  /// without a camera (a bare mesh) gets one framing its bounds, and one without lights a
+  /// light above the camera. Throws volley::Error for invalid geometry (naming the polygon).
+  Scene(const io::SceneDesc& desc, int width, int height, const Options& options);
+
+  const Accel& accel() const { return accel_; }
+  const core::Camera& camera() const { return camera_; }
+  const std::vector<io::Material>& materials() const { return materials_; }
+  const std::vector<io::PointLight>& lights() const { return lights_; }
+  const SceneFeatures& features() const { return features_; }
+  const glm::vec3& background() const { return background_; }
+  /// Scene bounds diagonal (sets the scale for automatic camera and light).
+  float extent() const { return extent_; }
+
+  /// Shading data for a hit of `ray` (a hit, not a miss).
+  SurfacePoint surface(const Ray& ray, const Hit& hit) const;
+
+ private:
+  Accel accel_;
+  core::Camera camera_;
+  std::vector<io::Material> materials_;
+  std::vector<io::PointLight> lights_;
+  SceneFeatures features_;
+  glm::vec3 background_{0.0f};
+  float extent_ = 1.0f;
+  // Triangles: prim ids 0 .. T-1 in mesh order; polygons follow.
+  std::vector<glm::vec3> positions_;
+  std::vector<std::uint32_t> indices_;
+  std::vector<std::uint32_t> tri_material_;
+  std::vector<glm::vec3> corner_normals_;
+  struct PolygonShading {
+    glm::vec3 normal;
+    float d;
+    std::uint32_t material;
+  };
+  std::vector<PolygonShading> polygons_;
+};
+
+}  // namespace volley::render

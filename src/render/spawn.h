@@ -1,0 +1,52 @@
+// Spawning secondary rays without re-hitting the surface they leave: the origin is moved
+// off the surface by the hit point's rounding-error bound along the normal, then rounded
+// away from it (pbrt-v4's OffsetRayOrigin; Pharr, Jakob, Humphreys 2023, 6.8.6).
+// A fixed epsilon fails at large and small scales (ACCURACY.md).
+#pragma once
+#include <cmath>
+#include <limits>
+
+#include <glm/glm.hpp>
+
+#include "volley/ray.h"
+
+namespace volley::render {
+
+/// Higham's gamma(n) = n u / (1 - n u), u = 2^-24: bound on n float roundings.
+constexpr float gamma(int n) {
+  constexpr float u = std::numeric_limits<float>::epsilon() * 0.5f;
+  return (float(n) * u) / (1.0f - float(n) * u);
+}
+
+/// Origin for a ray leaving point p (error bound p_error, geometric normal n) toward w.
+inline glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& p_error, const glm::vec3& n,
+                               const glm::vec3& w) {
+  const float d = glm::dot(glm::abs(n), p_error);
+  glm::vec3 offset = d * n;
+  if (glm::dot(w, n) < 0.0f) offset = -offset;
+  glm::vec3 po = p + offset;
+  // Round away from p so the rounding of the addition cannot pull the origin back.
+  for (int i = 0; i < 3; ++i) {
+    if (offset[i] > 0.0f) po[i] = std::nextafter(po[i], std::numeric_limits<float>::infinity());
+    else if (offset[i] < 0.0f) po[i] = std::nextafter(po[i], -std::numeric_limits<float>::infinity());
+  }
+  return po;
+}
+
+/// A ray from a surface point in direction w, searched over [0, tmax).
+inline Ray spawn_ray(const glm::vec3& p, const glm::vec3& p_error, const glm::vec3& n,
+                     const glm::vec3& w, float tmax = std::numeric_limits<float>::infinity()) {
+  const glm::vec3 o = offset_origin(p, p_error, n, w);
+  return Ray{{o.x, o.y, o.z}, 0.0f, {w.x, w.y, w.z}, tmax};
+}
+
+/// A shadow ray from a surface point to a light position: direction = light - origin,
+/// so the light sits at t = 1 and the half-open interval [0, 1) stops short of it.
+inline Ray spawn_shadow_ray(const glm::vec3& p, const glm::vec3& p_error, const glm::vec3& n,
+                            const glm::vec3& light) {
+  const glm::vec3 o = offset_origin(p, p_error, n, light - p);
+  const glm::vec3 d = light - o;
+  return Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, 1.0f};
+}
+
+}  // namespace volley::render

@@ -1,0 +1,36 @@
+// volley public API: rays and hits in array-of-structures form (the API boundary).
+// C++17-compatible; depends on the standard library only.
+#pragma once
+#include <cstdint>
+#include <limits>
+
+namespace volley {
+
+/// Prim id reported for a miss.
+inline constexpr std::uint32_t kInvalidPrim = 0xffffffffu;
+
+/// One ray: r(t) = org + t * dir, searched over tmin <= t < tmax.
+/// The direction need not be normalized; t is in units of |dir|.
+/// Same field order as a `.vray` record (32 bytes).
+struct Ray {
+  float org[3];     // 12 bytes
+  float tmin;       //  4 bytes
+  float dir[3];     // 12 bytes
+  float tmax;       //  4 bytes
+};
+static_assert(sizeof(Ray) == 32, "Ray is a .vray record");
+
+/// Closest-hit answer: t along the ray, barycentrics (u, v) of the hit relative to the
+/// triangle's second and third vertex (p = (1-u-v) p0 + u p1 + v p2), and the prim id
+/// the primitive was given when added. A miss has t = +inf and prim = kInvalidPrim.
+/// Polygons report u = v = 0. Same layout as a `.vhit` record (16 bytes).
+struct Hit {
+  float t = std::numeric_limits<float>::infinity();  // 4 bytes
+  float u = 0.0f;                                     // 4 bytes
+  float v = 0.0f;                                     // 4 bytes
+  std::uint32_t prim = kInvalidPrim;                  // 4 bytes
+  bool hit() const { return prim != kInvalidPrim; }
+};
+static_assert(sizeof(Hit) == 16, "Hit is a .vhit record");
+
+}  // namespace volley

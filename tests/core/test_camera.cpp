@@ -1,0 +1,61 @@
+// The notes' camera model: pixel (i, j) -> (wl + i du, wt + j dv, f) -> [u v w] p + e.
+#include <doctest/doctest.h>
+
+#include <cmath>
+
+#include "core/camera.h"
+
+using volley::core::Camera;
+
+TEST_CASE("camera: corner pixels land exactly on the window corners") {
+  // Axis-aligned basis and dyadic window values: every step is exact in float.
+  const Camera cam({1, 2, 3}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, 2.0f, -0.5f, 0.75f, 0.25f, -1.0f, 5, 9);
+  const glm::vec3 e(1, 2, 3);
+  CHECK(cam.pixel_point(0, 0) == e + glm::vec3(-0.5f, 0.25f, -2.0f));     // (wl, wt)
+  CHECK(cam.pixel_point(4, 0) == e + glm::vec3(0.75f, 0.25f, -2.0f));     // (wr, wt)
+  CHECK(cam.pixel_point(0, 8) == e + glm::vec3(-0.5f, -1.0f, -2.0f));     // (wl, wb)
+  CHECK(cam.pixel_point(4, 8) == e + glm::vec3(0.75f, -1.0f, -2.0f));     // (wr, wb)
+  // du = (wr - wl) / (nc - 1), dv = (wb - wt) / (nr - 1)
+  CHECK(cam.pixel_point(1, 0).x == doctest::Approx(e.x - 0.5f + 1.25f / 4.0f));
+  CHECK(cam.pixel_point(0, 1).y == doctest::Approx(e.y + 0.25f - 1.25f / 8.0f));
+}
+
+TEST_CASE("camera: the ray starts on the image plane and points away from the eye") {
+  const Camera cam({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 1.0f, -1, 1, 1, -1, 3, 3);
+  const auto r = cam.ray(1, 1);  // centre pixel
+  CHECK(r.org == glm::vec3(0, 0, 1));
+  CHECK(r.dir == glm::vec3(0, 0, 1));  // d = p - e
+  CHECK(r.tmin == 0.0f);
+  CHECK(std::isinf(r.tmax));
+  // r(lambda) = p + lambda (p - e)
+  const auto c = cam.ray(0, 0);
+  CHECK(c.org == glm::vec3(-1, 1, 1));
+  CHECK(c.dir == c.org);
+}
+
+TEST_CASE("camera: the basis maps camera coordinates to world coordinates") {
+  // A rotated basis: u = z, v = y, w = -x.
+  const Camera cam({10, 0, 0}, {0, 0, 1}, {0, 1, 0}, {-1, 0, 0}, 1.0f, -1, 1, 1, -1, 3, 3);
+  CHECK(cam.pixel_point(2, 0) == glm::vec3(9, 1, 1));  // u*wr + v*wt + w*f + e
+}
+
+TEST_CASE("camera: look_at builds an orthonormal basis and a window from the field of view") {
+  const Camera cam = Camera::look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 90.0f, 201, 101);
+  const auto centre = cam.ray(100, 50);
+  CHECK(centre.dir.x == doctest::Approx(0.0f).epsilon(1e-6));
+  CHECK(centre.dir.y == doctest::Approx(0.0f).epsilon(1e-6));
+  CHECK(centre.dir.z == doctest::Approx(-1.0f));
+  // fov 90: the top edge is 45 degrees up; the image is twice as wide as tall.
+  const auto top = cam.ray(100, 0);
+  CHECK(top.dir.y == doctest::Approx(-top.dir.z));
+  const auto right = cam.ray(200, 50);
+  CHECK(right.dir.x == doctest::Approx(-2.0f * right.dir.z * 100.0f / 101.0f).epsilon(0.02));
+  CHECK(right.dir.x > 0.0f);  // u points right
+}
+
+TEST_CASE("camera: bad parameters are rejected with a message") {
+  CHECK_THROWS_WITH(Camera::look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}, 45, 8, 8), doctest::Contains("coincide"));
+  CHECK_THROWS_WITH(Camera::look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, 45, 8, 8), doctest::Contains("parallel"));
+  CHECK_THROWS_WITH(Camera::look_at({0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 180, 8, 8), doctest::Contains("fov"));
+  CHECK_THROWS(Camera({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 1, -1, 1, 1, -1, 1, 8));
+}
