@@ -33,7 +33,11 @@ void Accel::Impl::build() {
   triangle_bvh = n ? core::build_bvh(boxes, build_options) : core::Bvh{};
 
   plane_triangles.clear();
-  if (test == TriangleTest::plane) {
+  kernels.reset();
+  node_blocks.clear();
+  if (isa != Isa::scalar && n) {
+    build_blocks();
+  } else if (test == TriangleTest::plane) {
     plane_triangles.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
       const glm::vec3* p = &triangles[3 * i];
@@ -50,28 +54,80 @@ void Accel::Impl::build() {
   polygon_bvh = polygons.empty() ? core::Bvh{} : core::build_bvh(poly_boxes, build_options);
 }
 
+// Packs each BVH leaf's triangles into its own run of SIMD blocks.
+void Accel::Impl::build_blocks() {
+  kernels = simd::TriangleKernels::create(test, isa);
+  std::vector<float> xyz;
+  std::vector<std::uint32_t> ids, groups, leaves;
+  xyz.reserve(triangles.size() * 3);
+  ids.reserve(triangle_ids.size());
+  for (std::uint32_t node = 0; node < triangle_bvh.nodes.size(); ++node) {
+    const core::BvhNode& leaf = triangle_bvh.nodes[node];
+    if (!leaf.is_leaf()) continue;
+    leaves.push_back(node);
+    groups.push_back(std::uint32_t(ids.size()));
+    for (std::uint32_t i = leaf.first_or_child; i < leaf.first_or_child + leaf.count; ++i) {
+      const std::uint32_t prim = triangle_bvh.prim_index[i];
+      for (int k = 0; k < 3; ++k)
+        xyz.insert(xyz.end(), {triangles[3 * prim + k].x, triangles[3 * prim + k].y, triangles[3 * prim + k].z});
+      ids.push_back(triangle_ids[prim]);
+    }
+  }
+  groups.push_back(std::uint32_t(ids.size()));
+  const auto ranges = kernels->build(xyz.data(), ids.data(), ids.size(), groups.data(), leaves.size());
+  node_blocks.assign(triangle_bvh.nodes.size(), simd::BlockRange{0, 0});
+  for (std::size_t g = 0; g < leaves.size(); ++g) node_blocks[leaves[g]] = ranges[g];
+}
+
+template <bool AnyHit>
+bool Accel::Impl::trace_triangles_simd(const Ray& ray, Hit& hit) const {
+  const simd::PreparedRay prepared = kernels->prepare(ray);
+  return core::traverse_leaves<AnyHit>(triangle_bvh, to_core(ray), [&](std::uint32_t node, float& tmax) {
+    if constexpr (AnyHit) {
+      return kernels->occluded(prepared, node_blocks[node]);
+    } else {
+      const float before = hit.t;
+      kernels->intersect(prepared, node_blocks[node], hit);
+      if (!(hit.t < before)) return false;
+      tmax = hit.t;
+      return true;
+    }
+  });
+}
+
+template <bool AnyHit>
+bool Accel::Impl::trace_triangles_scalar(const core::RayT<float>& r, Hit& hit) const {
+  const core::WoopRay<float> woop = core::make_woop_ray(r.dir);
+  return core::traverse<AnyHit>(triangle_bvh, r, [&](std::uint32_t prim, float& tmax) {
+    const glm::vec3* p = &triangles[3 * prim];
+    core::RayT<float> q = r;
+    q.tmax = tmax;
+    core::TriHit<float> h;
+    bool ok = false;
+    switch (test) {
+      case TriangleTest::plane:
+        ok = core::intersect_plane(q, plane_triangles[prim], h);
+        break;
+      case TriangleTest::moller:
+        ok = core::intersect_moller(q, p[0], p[1], p[2], h);
+        break;
+      case TriangleTest::watertight:
+        ok = core::intersect_watertight(q, woop, p[0], p[1], p[2], h);
+        break;
+    }
+    if (!ok) return false;
+    tmax = h.t;
+    hit = {h.t, h.u, h.v, triangle_ids[prim]};
+    return true;
+  });
+}
+
 template <bool AnyHit>
 bool Accel::Impl::trace(const Ray& ray, Hit& hit) const {
   core::RayT<float> r = to_core(ray);
   bool found = false;
   if (!triangle_bvh.nodes.empty()) {
-    const core::WoopRay<float> woop = core::make_woop_ray(r.dir);
-    found |= core::traverse<AnyHit>(triangle_bvh, r, [&](std::uint32_t prim, float& tmax) {
-      const glm::vec3* p = &triangles[3 * prim];
-      core::RayT<float> q = r;
-      q.tmax = tmax;
-      core::TriHit<float> h;
-      bool ok = false;
-      switch (test) {
-        case TriangleTest::plane: ok = core::intersect_plane(q, plane_triangles[prim], h); break;
-        case TriangleTest::moller: ok = core::intersect_moller(q, p[0], p[1], p[2], h); break;
-        case TriangleTest::watertight: ok = core::intersect_watertight(q, woop, p[0], p[1], p[2], h); break;
-      }
-      if (!ok) return false;
-      tmax = h.t;
-      hit = {h.t, h.u, h.v, triangle_ids[prim]};
-      return true;
-    });
+    found = kernels ? trace_triangles_simd<AnyHit>(ray, hit) : trace_triangles_scalar<AnyHit>(r, hit);
     if (AnyHit && found) return true;
     r.tmax = found ? hit.t : r.tmax;
   }
@@ -120,7 +176,13 @@ AccelInfo Accel::Impl::info() const {
       info.mean_leaf_size = s.mean_leaf_size;
     }
   }
-  info.bytes += triangles.size() * sizeof(glm::vec3) + plane_triangles.size() * sizeof(core::PlaneTriangle<float>);
+  // The triangle layout of the test in use (the input copy kept for re-commits not counted).
+  if (kernels)
+    info.bytes += kernels->bytes();
+  else if (test == TriangleTest::plane)
+    info.bytes += plane_triangles.size() * sizeof(core::PlaneTriangle<float>);
+  else
+    info.bytes += triangles.size() * sizeof(glm::vec3);
   return info;
 }
 

@@ -12,6 +12,7 @@
 #include "core/polygon.h"
 #include "core/triangle.h"
 #include "simd/dispatch.h"
+#include "simd/triangle_kernels.h"
 #include "volley/accel.h"
 
 namespace volley {
@@ -33,7 +34,10 @@ struct Accel::Impl {
   core::Bvh triangle_bvh;
   core::Bvh polygon_bvh;
   core::BvhBuildOptions build_options;
-  std::vector<core::PlaneTriangle<float>> plane_triangles;  ///< only for TriangleTest::plane
+  std::vector<core::PlaneTriangle<float>> plane_triangles;  ///< scalar `plane` only
+  /// SIMD path (isa != scalar): triangle blocks per BVH leaf, indexed by node.
+  std::unique_ptr<simd::TriangleKernels> kernels;
+  std::vector<simd::BlockRange> node_blocks;
 
   void build();
   Hit intersect(const Ray& ray) const;
@@ -41,6 +45,11 @@ struct Accel::Impl {
   AccelInfo info() const;
 
  private:
+  void build_blocks();
+  template <bool AnyHit>
+  bool trace_triangles_scalar(const core::RayT<float>& ray, Hit& hit) const;
+  template <bool AnyHit>
+  bool trace_triangles_simd(const Ray& ray, Hit& hit) const;
   template <bool AnyHit>
   bool trace(const Ray& ray, Hit& hit) const;
 };

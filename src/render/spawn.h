@@ -21,9 +21,13 @@ constexpr float gamma(int n) {
 /// Origin for a ray leaving point p (error bound p_error, geometric normal n) toward w.
 inline glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& p_error, const glm::vec3& n,
                                const glm::vec3& w) {
-  const float d = glm::dot(glm::abs(n), p_error);
-  glm::vec3 offset = d * n;
-  if (glm::dot(w, n) < 0.0f) offset = -offset;
+  // A floor of two roundings of the largest coordinate: a point on an axis-aligned plane
+  // through 0 (a floor at y = 0) has an exactly zero bound along its normal, yet the ray
+  // test still rounds in terms of the other coordinates and would find t = 0 on it.
+  const glm::vec3 a = glm::abs(p);
+  const glm::vec3 err = p_error + glm::vec3(gamma(2) * std::max(a.x, std::max(a.y, a.z)));
+  const float side = glm::dot(w, n) < 0.0f ? -1.0f : 1.0f;
+  const glm::vec3 offset = side * glm::dot(glm::abs(n), err) * n;
   glm::vec3 po = p + offset;
   // Round away from p so the rounding of the addition cannot pull the origin back.
   for (int i = 0; i < 3; ++i) {

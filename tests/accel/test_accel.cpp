@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/triangle.h"
+#include "simd/dispatch.h"
 #include "volley/accel.h"
 
 using volley::Accel;
@@ -40,7 +41,7 @@ TEST_CASE("accel: bad input is rejected with a message") {
 
 TEST_CASE("accel: prim ids run across additions; closest of triangles and polygons wins") {
   for (auto test : kTests) {
-    CAPTURE(volley::to_string(test));
+    CAPTURE(std::string(volley::to_string(test)));
     Accel accel;
     // Two triangles at z = 5 and z = 3, then a square polygon at z = 4.
     const float tris[] = {-1, -1, 5, 1, -1, 5, 0, 1, 5, -1, -1, 3, 1, -1, 3, 0, 1, 3};
@@ -87,11 +88,18 @@ TEST_CASE("accel: closest hit equals brute force over the scalar oracle on a ran
       idx.push_back(std::uint32_t(3 * i + k));
     }
   }
+  for (auto isa : {volley::Isa::scalar, volley::Isa::sse42, volley::Isa::avx2, volley::Isa::avx512})
   for (auto test : kTests) {
-    CAPTURE(volley::to_string(test));
+    if (!volley::simd::cpu_has(isa)) {
+      MESSAGE("skipped: this CPU lacks " << std::string(volley::to_string(isa)));
+      continue;
+    }
+    CAPTURE(std::string(volley::to_string(test)));
+    CAPTURE(std::string(volley::to_string(isa)));
     Accel accel;
     accel.add_triangles(xyz.data(), xyz.size() / 3, idx.data(), n);
-    accel.commit({test, volley::Isa::scalar});
+    accel.commit({test, isa});
+    CHECK(accel.info().isa == isa);
     int hits = 0, mismatches = 0;
     for (int r = 0; r < 3000; ++r) {
       const glm::vec3 o(pos(rng) * 2, pos(rng) * 2, pos(rng) * 2);

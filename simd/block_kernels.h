@@ -1,0 +1,253 @@
+// The kernel forms, generic over the triangle test (moller.h, plane.h, watertight.h):
+//  - one ray x blocks (single-ray traversal of incoherent rays), closest hit and any hit;
+//  - a packet of K rays x one triangle, and x blocks (coherent packets), closest and any.
+// Bodies are templated on Arch and instantiated only in the per-ISA files
+// (isa_sse42.cpp, isa_avx2.cpp, isa_avx512.cpp); the extern template declarations at the
+// end keep every other file from instantiating them.
+//
+// Closest-hit semantics, all forms: triangles are taken in block order, lane order, and a
+// triangle replaces the current hit when it is hit with tmin <= t < upper, where upper
+// starts as (hit.t < ray.tmax ? hit.t : ray.tmax) and becomes t of each accepted hit. That
+// is the scalar oracle's loop exactly (ties keep the earlier triangle unless the test
+// itself says otherwise), so the kernels agree with it triangle by triangle.
+#pragma once
+#include <bit>
+#include <cstdint>
+#include <limits>
+
+#include "simd/kernel_common.h"
+#include "simd/moller.h"
+#include "simd/plane.h"
+#include "simd/prepared_ray.h"
+#include "simd/ray_packet.h"
+#include "simd/triangle_blocks.h"
+#include "simd/watertight.h"
+#include "volley/options.h"
+#include "volley/ray.h"
+
+namespace volley::simd {
+
+namespace detail {
+template <class Arch, TriangleTest Test>
+struct TestOfT;
+template <class Arch>
+struct TestOfT<Arch, TriangleTest::moller> {
+  using type = MollerTest<Arch>;
+};
+template <class Arch>
+struct TestOfT<Arch, TriangleTest::plane> {
+  using type = PlaneTest<Arch>;
+};
+template <class Arch>
+struct TestOfT<Arch, TriangleTest::watertight> {
+  using type = WatertightTest<Arch>;
+};
+/// The vectorized test of `Test` on Arch.
+template <class Arch, TriangleTest Test>
+using TestOf = typename TestOfT<Arch, Test>::type;
+}  // namespace detail
+
+/// One ray against runs of blocks of W = kLanes<Arch> triangles.
+/// Thread-safe (pure functions of their arguments). `blocks` must be 64-byte aligned.
+template <class Arch, TriangleTest Test>
+struct RayBlockKernels {
+  static constexpr int W = kLanes<Arch>;
+  using Block = BlockFor<Test, W>;
+
+  /// Closest hit over blocks[0 .. count): updates `hit` (t, u, v, prim) for each triangle
+  /// hit with tmin <= t < min(hit.t, ray.tmax); leaves it untouched otherwise.
+  static void intersect(const PreparedRay& ray, const Block* blocks, std::uint32_t count, Hit& hit);
+  /// True when some triangle of blocks[0 .. count) is hit with tmin <= t < ray.tmax.
+  static bool occluded(const PreparedRay& ray, const Block* blocks, std::uint32_t count);
+};
+
+/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles.
+/// Only lanes whose `active` bit is set are tested and written.
+template <class Arch, TriangleTest Test, int K>
+struct PacketKernels {
+  static constexpr int W = kLanes<Arch>;
+  static constexpr int L = kLanes<Arch>;
+  static_assert(K % L == 0, "K rays per packet must be a multiple of the lane count");
+  using Block = BlockFor<Test, W>;
+
+  /// Closest hit of every active lane over blocks[0 .. count) (semantics as in
+  /// RayBlockKernels::intersect, per lane).
+  static void intersect(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits);
+  /// Closest hit of every active lane against triangle j of `block` alone.
+  static void intersect_triangle(const RayPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
+  /// The lanes of `active` (a subset of rays.active) that some triangle of
+  /// blocks[0 .. count) occludes (tmin <= t < tmax). Stops as soon as all are occluded.
+  static std::uint32_t occluded(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count,
+                                std::uint32_t active);
+};
+
+// ---------------------------------------------------------------------------------------
+
+template <class Arch, TriangleTest Test>
+void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block* blocks, std::uint32_t count,
+                                            Hit& hit) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  static_assert(B::size == W, "kLanes<Arch> must be the float lane count");
+  const auto rays = T::broadcast(ray);
+  float upper = hit.t < ray.ray.tmax ? hit.t : ray.ray.tmax;
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const Block& block = blocks[b];
+    // Test all W triangles against the current upper end.
+    const auto cand = T::test(rays, T::load_block(block, rays), B(upper));
+    std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
+    if (bits == 0) continue;
+    alignas(64) float ts[W], us[W], vs[W];
+    cand.t.store_aligned(ts);
+    cand.u.store_aligned(us);
+    cand.v.store_aligned(vs);
+    // Take hits in lane order, shrinking upper after each (the oracle's loop); a lane
+    // hit against a larger upper may no longer be once an earlier lane shrank it.
+    int lane = std::countr_zero(bits);
+    for (;;) {
+      upper = ts[lane];
+      bits &= ~((2u << lane) - 1u);  // lanes after `lane`
+      if (bits == 0) break;
+      bits &= detail::bits_from_mask<Arch>(T::accept(cand, B(upper)));
+      if (bits == 0) break;
+      lane = std::countr_zero(bits);
+    }
+    hit.t = ts[lane];
+    hit.u = us[lane];
+    hit.v = vs[lane];
+    hit.prim = block.prim[lane];
+  }
+}
+
+template <class Arch, TriangleTest Test>
+bool RayBlockKernels<Arch, Test>::occluded(const PreparedRay& ray, const Block* blocks, std::uint32_t count) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  const auto rays = T::broadcast(ray);
+  const B upper(ray.ray.tmax);
+  for (std::uint32_t b = 0; b < count; ++b)
+    if (xsimd::any(T::test(rays, T::load_block(blocks[b], rays), upper).valid)) return true;
+  return false;
+}
+
+template <class Arch, TriangleTest Test, int K>
+void PacketKernels<Arch, Test, K>::intersect(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count,
+                                             HitPacket<K>& hits) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(rays, c);
+    // Inactive lanes search [tmin, -inf): never hit.
+    B upper = xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
+                            B(-std::numeric_limits<float>::infinity()));
+    B hu = B::load_aligned(hits.u + c), hv = B::load_aligned(hits.v + c);
+    B hp = detail::load_ids<Arch>(hits.prim + c);
+    M any_hit(false);
+    // Triangles in block order, each broadcast to all lanes; hits only shrink upper.
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const Block& block = blocks[b];
+      for (int j = 0; j < W; ++j) {
+        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+        upper = xsimd::select(cand.valid, cand.t, upper);
+        hu = xsimd::select(cand.valid, cand.u, hu);
+        hv = xsimd::select(cand.valid, cand.v, hv);
+        hp = xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), hp);
+        any_hit = any_hit | cand.valid;
+      }
+    }
+    if (xsimd::none(any_hit)) continue;
+    xsimd::select(any_hit, upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
+    hu.store_aligned(hits.u + c);
+    hv.store_aligned(hits.v + c);
+    hp.store_aligned(reinterpret_cast<float*>(hits.prim + c));
+  }
+}
+
+template <class Arch, TriangleTest Test, int K>
+void PacketKernels<Arch, Test, K>::intersect_triangle(const RayPacket<K>& rays, const Block& block, int j,
+                                                      HitPacket<K>& hits) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(rays, c);
+    const B ht = B::load_aligned(hits.t + c);
+    const B upper = xsimd::select(act, detail::upper_bound(ht, B::load_aligned(rays.tmax + c)),
+                                  B(-std::numeric_limits<float>::infinity()));
+    const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+    if (xsimd::none(cand.valid)) continue;
+    xsimd::select(cand.valid, cand.t, ht).store_aligned(hits.t + c);
+    xsimd::select(cand.valid, cand.u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
+    xsimd::select(cand.valid, cand.v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
+    xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
+        .store_aligned(reinterpret_cast<float*>(hits.prim + c));
+  }
+}
+
+template <class Arch, TriangleTest Test, int K>
+std::uint32_t PacketKernels<Arch, Test, K>::occluded(const RayPacket<K>& rays, const Block* blocks,
+                                                     std::uint32_t count, std::uint32_t active) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  std::uint32_t result = 0;
+  active &= rays.active;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(rays, c);
+    const B upper = xsimd::select(act, B::load_aligned(rays.tmax + c), B(-std::numeric_limits<float>::infinity()));
+    M hit(false);
+    // Any hit ends a lane; the chunk ends when every active lane has one.
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const Block& block = blocks[b];
+      for (int j = 0; j < W; ++j) hit = hit | T::test(r, T::broadcast_tri(block, j, r), upper).valid;
+      if (xsimd::all(hit | ~act)) break;
+    }
+    result |= detail::bits_from_mask<Arch>(hit & act) << c;
+  }
+  return result;
+}
+
+// Explicit instantiation declarations: the definitions live in the per-ISA files only
+// (one line there per line here). K = every packet size that is a multiple of the lanes.
+extern template struct RayBlockKernels<Sse42, TriangleTest::moller>;
+extern template struct RayBlockKernels<Sse42, TriangleTest::plane>;
+extern template struct RayBlockKernels<Sse42, TriangleTest::watertight>;
+extern template struct PacketKernels<Sse42, TriangleTest::moller, 4>;
+extern template struct PacketKernels<Sse42, TriangleTest::moller, 8>;
+extern template struct PacketKernels<Sse42, TriangleTest::moller, 16>;
+extern template struct PacketKernels<Sse42, TriangleTest::plane, 4>;
+extern template struct PacketKernels<Sse42, TriangleTest::plane, 8>;
+extern template struct PacketKernels<Sse42, TriangleTest::plane, 16>;
+extern template struct PacketKernels<Sse42, TriangleTest::watertight, 4>;
+extern template struct PacketKernels<Sse42, TriangleTest::watertight, 8>;
+extern template struct PacketKernels<Sse42, TriangleTest::watertight, 16>;
+
+extern template struct RayBlockKernels<Avx2, TriangleTest::moller>;
+extern template struct RayBlockKernels<Avx2, TriangleTest::plane>;
+extern template struct RayBlockKernels<Avx2, TriangleTest::watertight>;
+extern template struct PacketKernels<Avx2, TriangleTest::moller, 8>;
+extern template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
+extern template struct PacketKernels<Avx2, TriangleTest::plane, 8>;
+extern template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
+extern template struct PacketKernels<Avx2, TriangleTest::watertight, 8>;
+extern template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
+
+extern template struct RayBlockKernels<Avx512, TriangleTest::moller>;
+extern template struct RayBlockKernels<Avx512, TriangleTest::plane>;
+extern template struct RayBlockKernels<Avx512, TriangleTest::watertight>;
+extern template struct PacketKernels<Avx512, TriangleTest::moller, 16>;
+extern template struct PacketKernels<Avx512, TriangleTest::plane, 16>;
+extern template struct PacketKernels<Avx512, TriangleTest::watertight, 16>;
+
+}  // namespace volley::simd

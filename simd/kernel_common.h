@@ -1,0 +1,105 @@
+// Small helpers shared by the triangle kernels. Everything here is templated on Arch
+// (STYLE rule 2): it is compiled only inside the per-ISA files, and every symbol it can
+// emit carries the arch tag.
+#pragma once
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+#include <xsimd/xsimd.hpp>
+
+#include "simd/arch.h"
+#include "simd/ray_packet.h"
+#include "volley/ray.h"
+
+namespace volley::simd::detail {
+
+/// Float batch of Arch.
+template <class Arch>
+using FloatB = xsimd::batch<float, Arch>;
+/// Lane mask of a float batch.
+template <class Arch>
+using MaskB = xsimd::batch_bool<float, Arch>;
+/// 32-bit integer batch of Arch.
+template <class Arch>
+using IntB = xsimd::batch<std::int32_t, Arch>;
+
+/// True when Arch keeps lane masks in AVX-512 mask registers (batch_bool is a bit mask).
+template <class Arch>
+inline constexpr bool kHasMaskRegisters = std::is_base_of_v<xsimd::avx512f, Arch>;
+
+/// Lanes whose bit is set in `bits` (bit i = lane i of this batch).
+template <class Arch>
+MaskB<Arch> mask_from_bits(std::uint32_t bits) {
+  if constexpr (kHasMaskRegisters<Arch>) {
+    return MaskB<Arch>(static_cast<typename MaskB<Arch>::register_type>(bits));
+  } else {
+    alignas(64) std::int32_t lane_bit[kLanes<Arch>];
+    for (int i = 0; i < kLanes<Arch>; ++i) lane_bit[i] = std::int32_t(1u << i);
+    const IntB<Arch> b = IntB<Arch>::load_aligned(lane_bit) & IntB<Arch>(std::int32_t(bits));
+    return xsimd::bool_cast(b != IntB<Arch>(0));
+  }
+}
+
+/// Bit i set when lane i of `m` is true (the 8.1 stand-in for batch_bool::mask()).
+template <class Arch>
+std::uint32_t bits_from_mask(MaskB<Arch> m) {
+  if constexpr (kHasMaskRegisters<Arch>) {
+    return static_cast<std::uint32_t>(static_cast<typename MaskB<Arch>::register_type>(m));
+  } else if constexpr (kLanes<Arch> == 8) {
+    return static_cast<std::uint32_t>(_mm256_movemask_ps(m));
+  } else {
+    return static_cast<std::uint32_t>(_mm_movemask_ps(m));
+  }
+}
+
+/// Reinterprets 32-bit ids as float lanes (so that select() can carry them with t, u, v).
+template <class Arch>
+FloatB<Arch> load_ids(const std::uint32_t* ids) {
+  return FloatB<Arch>::load_aligned(reinterpret_cast<const float*>(ids));
+}
+
+/// A 32-bit id broadcast as float bits.
+template <class Arch>
+FloatB<Arch> broadcast_id(std::uint32_t id) {
+  float f;
+  std::memcpy(&f, &id, sizeof f);
+  return FloatB<Arch>(f);
+}
+
+/// The upper end of the search interval: the nearer of the current hit and the ray's
+/// tmax, and NaN when tmax is NaN (so a NaN ray stays hit-free).
+template <class Arch>
+FloatB<Arch> upper_bound(FloatB<Arch> hit_t, FloatB<Arch> tmax) {
+  return xsimd::select(hit_t < tmax, hit_t, tmax);
+}
+
+}  // namespace volley::simd::detail
+
+namespace volley::simd::detail {
+
+/// L rays as lanes: one ray broadcast to all lanes, or L consecutive lanes of a packet.
+template <class Arch>
+struct RayLanes {
+  FloatB<Arch> ox, oy, oz;
+  FloatB<Arch> dx, dy, dz;
+  FloatB<Arch> tmin;
+};
+
+/// Lanes offset .. offset + kLanes<Arch> of a packet.
+template <class Arch, int K>
+RayLanes<Arch> load_ray_lanes(const RayPacket<K>& p, int offset) {
+  using B = FloatB<Arch>;
+  return {B::load_aligned(p.ox + offset), B::load_aligned(p.oy + offset), B::load_aligned(p.oz + offset),
+          B::load_aligned(p.dx + offset), B::load_aligned(p.dy + offset), B::load_aligned(p.dz + offset),
+          B::load_aligned(p.tmin + offset)};
+}
+
+/// One ray in every lane.
+template <class Arch>
+RayLanes<Arch> broadcast_ray_lanes(const Ray& r) {
+  using B = FloatB<Arch>;
+  return {B(r.org[0]), B(r.org[1]), B(r.org[2]), B(r.dir[0]), B(r.dir[1]), B(r.dir[2]), B(r.tmin)};
+}
+
+}  // namespace volley::simd::detail

@@ -1,0 +1,92 @@
+// The notes' algorithm 1 on float lanes: ray/plane distance, then the two half-plane
+// (edge plane) tests on the hit point, with the planes precomputed per triangle (Havel &
+// Herout 2010). The SIMD twin of src/core/triangle_plane.h: the same float operations in
+// the same order (no FMA, a true division), so every lane gives the oracle's hit/miss and
+// t, u, v bit for bit.
+#pragma once
+#include <limits>
+
+#include "simd/kernel_common.h"
+#include "simd/prepared_ray.h"
+#include "simd/triangle_blocks.h"
+
+namespace volley::simd::detail {
+
+/// Plane test on kLanes<Arch> (ray, triangle) pairs. Reads PlaneBlock<kLanes<Arch>>.
+template <class Arch>
+struct PlaneTest {
+  static constexpr int W = kLanes<Arch>;
+  using Block = PlaneBlock<W>;
+  using B = FloatB<Arch>;
+  using M = MaskB<Arch>;
+
+  using Rays = RayLanes<Arch>;
+  /// Triangle lanes: plane n.x = d, edge planes (n1, d1) and (n2, d2).
+  struct Tris {
+    B nx, ny, nz, d, n1x, n1y, n1z, d1, n2x, n2y, n2z, d2;
+  };
+  /// Candidate hits: `valid` lanes are hit with tmin <= t < upper.
+  struct Cand {
+    M valid;
+    B t, u, v;
+  };
+
+  static Rays broadcast(const PreparedRay& r);
+  template <int K>
+  static Rays load(const RayPacket<K>& p, int offset);
+  static Tris load_block(const Block& b, const Rays& r);
+  static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  static Cand test(const Rays& r, const Tris& tri, B upper);
+  /// The lanes of `c` still hit when the upper end shrinks to `upper`.
+  static M accept(const Cand& c, B upper);
+};
+
+template <class Arch>
+auto PlaneTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
+  return broadcast_ray_lanes<Arch>(r.ray);
+}
+
+template <class Arch>
+template <int K>
+auto PlaneTest<Arch>::load(const RayPacket<K>& p, int offset) -> Rays {
+  return load_ray_lanes<Arch, K>(p, offset);
+}
+
+template <class Arch>
+auto PlaneTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {
+  return {B::load_aligned(b.n[0]),  B::load_aligned(b.n[1]),  B::load_aligned(b.n[2]),  B::load_aligned(b.d),
+          B::load_aligned(b.n1[0]), B::load_aligned(b.n1[1]), B::load_aligned(b.n1[2]), B::load_aligned(b.d1),
+          B::load_aligned(b.n2[0]), B::load_aligned(b.n2[1]), B::load_aligned(b.n2[2]), B::load_aligned(b.d2)};
+}
+
+template <class Arch>
+auto PlaneTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris {
+  return {B(b.n[0][j]),  B(b.n[1][j]),  B(b.n[2][j]),  B(b.d[j]),  B(b.n1[0][j]), B(b.n1[1][j]),
+          B(b.n1[2][j]), B(b.d1[j]),    B(b.n2[0][j]), B(b.n2[1][j]), B(b.n2[2][j]), B(b.d2[j])};
+}
+
+template <class Arch>
+auto PlaneTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
+  const B zero(0.0f), one(1.0f), max(std::numeric_limits<float>::max());
+  // den = n . dir; fails for 0 (parallel ray, degenerate triangle), Inf and NaN (padding).
+  const B den = tri.nx * r.dx + tri.ny * r.dy + tri.nz * r.dz;
+  const B ad = xsimd::abs(den);
+  M valid = (ad > zero) & (ad <= max);
+  if (xsimd::none(valid)) return {valid, den, den, den};
+  // Ray/plane distance t = (d - n . org) / den, in [tmin, upper).
+  const B t = (tri.d - (tri.nx * r.ox + tri.ny * r.oy + tri.nz * r.oz)) / den;
+  valid = valid & (r.tmin <= t) & (t < upper);
+  // Half-plane tests on q = org + t dir: u = n1 . q + d1, v = n2 . q + d2.
+  const B qx = r.ox + t * r.dx, qy = r.oy + t * r.dy, qz = r.oz + t * r.dz;
+  const B u = tri.n1x * qx + tri.n1y * qy + tri.n1z * qz + tri.d1;
+  const B v = tri.n2x * qx + tri.n2y * qy + tri.n2z * qz + tri.d2;
+  valid = valid & (u >= zero) & (v >= zero) & (u + v <= one);
+  return {valid, t, u, v};
+}
+
+template <class Arch>
+auto PlaneTest<Arch>::accept(const Cand& c, B upper) -> M {
+  return c.valid & (c.t < upper);
+}
+
+}  // namespace volley::simd::detail

@@ -1,0 +1,26 @@
+// A single ray with its per-ray precomputation hoisted out of the triangle loop (the
+// Woop shear for the watertight test). Plain data, no xsimd.
+#pragma once
+#include <cstdint>
+
+#include "volley/ray.h"
+
+namespace volley::simd {
+
+/// One ray plus what the kernels would otherwise recompute per leaf. Built by
+/// prepare_ray(); immutable afterwards, so one PreparedRay may be reused for every leaf
+/// the ray visits. 64 bytes, one cache line.
+struct alignas(64) PreparedRay {
+  Ray ray;               // 32 bytes: the ray as given
+  std::int32_t k[3];     // 12 bytes: watertight axes kx, ky, kz (kz = largest |dir|)
+  float s[3];            // 12 bytes: watertight shear Sx, Sy, Sz
+  std::uint32_t pad[2];  //  8 bytes
+};
+static_assert(sizeof(PreparedRay) == 64, "PreparedRay: one cache line");
+
+/// Copies the ray and computes its Woop–Benthin–Wald shear exactly as the scalar oracle's
+/// make_woop_ray does (so the kernels agree with it bit for bit). With
+/// `with_shear == false` only the ray is copied (moller and plane need nothing else).
+PreparedRay prepare_ray(const Ray& ray, bool with_shear = true);
+
+}  // namespace volley::simd

@@ -1,0 +1,44 @@
+// Scalar oracle: the three ray/triangle tests behind one switch (DESIGN.md, "Three
+// triangle tests"), and the degenerate-triangle predicate the builders share.
+#pragma once
+#include <cmath>
+
+#include "core/geometry.h"
+#include "core/triangle_moller.h"
+#include "core/triangle_plane.h"
+#include "core/triangle_watertight.h"
+#include "volley/options.h"
+
+namespace volley::core {
+
+/// True when no ray/triangle test can be trusted on (p0, p1, p2): a non-finite coordinate,
+/// or a cross product (p1-p0) x (p2-p0) that is exactly zero (zero area: repeated vertex,
+/// collinear) or not finite (overflow). All three tests miss a zero-area or NaN triangle.
+template <class T>
+bool is_degenerate(const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2) {
+  const auto finite = [](const Vec3<T>& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  };
+  if (!finite(p0) || !finite(p1) || !finite(p2)) return true;
+  const Vec3<T> n = glm::cross(p1 - p0, p2 - p0);
+  return n == Vec3<T>(0) || !finite(n);
+}
+
+/// Runs the chosen test on one ray and one triangle, building its precomputed data
+/// (PlaneTriangle, WoopRay) on the fly. Same contract as the individual tests: both
+/// facings, tmin <= t < tmax, `hit` written only on a hit. Pure function, thread safe.
+template <class T>
+bool intersect_triangle(volley::TriangleTest test, const RayT<T>& ray, const Vec3<T>& p0,
+                        const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
+  switch (test) {
+    case volley::TriangleTest::plane:
+      return intersect_plane(ray, PlaneTriangle<T>::from(p0, p1, p2), hit);
+    case volley::TriangleTest::moller:
+      return intersect_moller(ray, p0, p1, p2, hit);
+    case volley::TriangleTest::watertight:
+      return intersect_watertight(ray, p0, p1, p2, hit);
+  }
+  return false;
+}
+
+}  // namespace volley::core

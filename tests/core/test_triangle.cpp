@@ -1,0 +1,603 @@
+// Scalar ray/triangle oracle (core/triangle.h): the three tests in float and double
+// against an independent long-double reference and each other, adversarial inputs,
+// watertightness on a closed indexed mesh, and the barycentric convention.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/triangle.h"
+
+namespace {
+
+using volley::TriangleTest;
+using volley::core::intersect_triangle;
+using volley::core::is_degenerate;
+using volley::core::RayT;
+using volley::core::TriHit;
+using volley::core::Vec3;
+using Vec3f = Vec3<float>;
+using Vec3d = Vec3<double>;
+
+constexpr TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller,
+                                   TriangleTest::watertight};
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+std::string name(TriangleTest test) {
+  switch (test) {
+    case TriangleTest::plane: return "plane";
+    case TriangleTest::moller: return "moller";
+    case TriangleTest::watertight: return "watertight";
+  }
+  return "?";
+}
+
+struct Tri {
+  Vec3f p0, p1, p2;
+};
+
+template <class T>
+bool run(TriangleTest test, const RayT<float>& ray, const Tri& tri, TriHit<T>& hit) {
+  return intersect_triangle(test, volley::core::ray_cast<T>(ray), Vec3<T>(tri.p0), Vec3<T>(tri.p1),
+                            Vec3<T>(tri.p2), hit);
+}
+
+// ---- independent long-double reference: the notes' 3x3 system, Cramer with explicit dets --
+
+using L = long double;
+using VecL = std::array<L, 3>;
+
+VecL to_l(const Vec3f& v) { return {L(v.x), L(v.y), L(v.z)}; }
+VecL sub(const VecL& a, const VecL& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+VecL neg(const VecL& a) { return {-a[0], -a[1], -a[2]}; }
+L dot(const VecL& a, const VecL& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+VecL cross(const VecL& a, const VecL& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+L det3(const VecL& c0, const VecL& c1, const VecL& c2) { return dot(c0, cross(c1, c2)); }
+L norm(const VecL& a) { return std::sqrt(dot(a, a)); }
+
+struct Reference {
+  L t, u, v;  // solution of [-(p1-p0) -(p2-p0) d][u v t]^T = p0 - org
+  L cos;      // |cos| of the angle between dir and the normal
+  bool hit;   // u, v >= 0, u + v <= 1, tmin <= t < tmax
+  L margin;   // distance to the hit/miss boundary in barycentric and relative t units
+};
+
+Reference reference(const RayT<float>& ray, const Tri& tri) {
+  const VecL p0 = to_l(tri.p0), e1 = sub(to_l(tri.p1), p0), e2 = sub(to_l(tri.p2), p0);
+  const VecL d = to_l(ray.dir), b = sub(p0, to_l(ray.org));
+  const VecL c0 = neg(e1), c1 = neg(e2);
+  const L det = det3(c0, c1, d);
+  Reference r{};
+  r.u = det3(b, c1, d) / det;
+  r.v = det3(c0, b, d) / det;
+  r.t = det3(c0, c1, b) / det;
+  r.cos = std::abs(dot(d, cross(e1, e2))) / (norm(d) * norm(cross(e1, e2)));
+  r.hit = r.u >= 0 && r.v >= 0 && r.u + r.v <= 1 && L(ray.tmin) <= r.t && r.t < L(ray.tmax);
+  const L w = 1 - r.u - r.v;
+  r.margin = std::min({std::abs(r.u), std::abs(r.v), std::abs(w)});
+  const L scale = std::max(std::abs(r.t), L(1));
+  if (std::isfinite(ray.tmin)) r.margin = std::min(r.margin, std::abs(r.t - ray.tmin) / scale);
+  if (std::isfinite(ray.tmax)) r.margin = std::min(r.margin, std::abs(r.t - ray.tmax) / scale);
+  return r;
+}
+
+// ---- generators ----------------------------------------------------------------------------
+
+float uniform(std::mt19937& rng, float lo, float hi) {
+  return std::uniform_real_distribution<float>(lo, hi)(rng);
+}
+Vec3f uniform3(std::mt19937& rng, float lo, float hi) {
+  return {uniform(rng, lo, hi), uniform(rng, lo, hi), uniform(rng, lo, hi)};
+}
+
+struct Sample {
+  RayT<float> ray;
+  Tri tri;
+};
+
+// Well-conditioned random ray/triangle pairs: vertices in [-1,1]^3, no slivers
+// (|n| >= 0.1 max|edge|^2), |cos(dir, n)| >= 0.05, origin at least 0.25 from the plane.
+// The ray aims at barycentrics drawn in [-0.25, 1.25]^2 (about 22% inside); a quarter of
+// the rays get a finite tmax near the target, an eighth a positive tmin.
+Sample conditioned_sample(std::mt19937& rng) {
+  for (;;) {
+    const Tri tri{uniform3(rng, -1, 1), uniform3(rng, -1, 1), uniform3(rng, -1, 1)};
+    const Vec3d e1 = Vec3d(tri.p1 - tri.p0), e2 = Vec3d(tri.p2 - tri.p0), e3 = Vec3d(tri.p2 - tri.p1);
+    const Vec3d n = glm::cross(e1, e2);
+    const double longest = std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
+    if (glm::length(n) < 0.1 * longest) continue;
+    const double u = uniform(rng, -0.25f, 1.25f), v = uniform(rng, -0.25f, 1.25f);
+    const Vec3d target = Vec3d(tri.p0) + u * e1 + v * e2;
+    const Vec3f org = uniform3(rng, -4, 4);
+    const double scale = std::exp2(uniform(rng, -3, 3));
+    const Vec3f dir = Vec3f((target - Vec3d(org)) * scale);
+    const Vec3d nn = glm::normalize(n);
+    if (std::abs(glm::dot(nn, glm::normalize(Vec3d(dir)))) < 0.05) continue;
+    if (std::abs(glm::dot(nn, Vec3d(org) - Vec3d(tri.p0))) < 0.25) continue;
+    RayT<float> ray{org, 0.0f, dir, kInf};
+    const float t_target = float(1 / scale);
+    if (uniform(rng, 0, 1) < 0.25f) ray.tmax = t_target * uniform(rng, 0.5f, 1.5f);
+    if (uniform(rng, 0, 1) < 0.125f) ray.tmin = t_target * uniform(rng, 0.5f, 1.0f);
+    return {ray, tri};
+  }
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, std::size_t(p * double(v.size())))];
+}
+
+// ---- random agreement -------------------------------------------------------------------------
+
+TEST_CASE("triangle: float and double tests agree with a long-double reference and each other") {
+  constexpr int kCount = 100000;
+  // Disagreement allowed only this close to the boundary (barycentric units, or relative t).
+  constexpr double kBand = 1e-5;
+  constexpr int kResults = 6;  // (plane, moller, watertight) x (float, double)
+
+  std::mt19937 rng(20240611);
+  int ref_hits = 0;
+  int far_disagree[kResults] = {}, near_disagree[kResults] = {};
+  int pair_far_disagree = 0;
+  int nan_outputs = 0;
+  std::vector<double> t_err_float[3];
+  double t_err_double_max = 0;
+
+  for (int s = 0; s < kCount; ++s) {
+    const Sample smp = conditioned_sample(rng);
+    const Reference ref = reference(smp.ray, smp.tri);
+    ref_hits += ref.hit;
+    const bool near = ref.margin < kBand;
+
+    bool hit[kResults];
+    for (int k = 0; k < 3; ++k) {
+      TriHit<float> hf{};
+      TriHit<double> hd{};
+      hit[2 * k] = run(kTests[k], smp.ray, smp.tri, hf);
+      hit[2 * k + 1] = run(kTests[k], smp.ray, smp.tri, hd);
+      if (hit[2 * k]) {
+        nan_outputs += !(std::isfinite(hf.t) && std::isfinite(hf.u) && std::isfinite(hf.v));
+        if (ref.hit) t_err_float[k].push_back(double(std::abs((L(hf.t) - ref.t) / ref.t)));
+      }
+      if (hit[2 * k + 1] && ref.hit)
+        t_err_double_max = std::max(t_err_double_max, double(std::abs((L(hd.t) - ref.t) / ref.t)));
+    }
+    for (int k = 0; k < kResults; ++k) {
+      if (hit[k] == ref.hit) continue;
+      (near ? near_disagree : far_disagree)[k]++;
+    }
+    for (int i = 0; i < kResults; ++i)
+      for (int j = i + 1; j < kResults; ++j) pair_far_disagree += hit[i] != hit[j] && !near;
+  }
+
+  // The generator must produce both outcomes in quantity.
+  CHECK(ref_hits > kCount / 10);
+  CHECK(kCount - ref_hits > kCount / 10);
+  CHECK(nan_outputs == 0);
+  CHECK(pair_far_disagree == 0);
+  for (int k = 0; k < kResults; ++k) {
+    CAPTURE(name(kTests[k / 2]));
+    const std::string precision = k % 2 ? "double" : "float";
+    CAPTURE(precision);
+    CHECK(far_disagree[k] == 0);
+    MESSAGE(name(kTests[k / 2]) << " " << precision << ": " << near_disagree[k]
+                                << " disagreements within " << kBand << " of the boundary");
+  }
+  for (int k = 0; k < 3; ++k) {
+    CAPTURE(name(kTests[k]));
+    REQUIRE(!t_err_float[k].empty());
+    const double median = percentile(t_err_float[k], 0.5);
+    const double p999 = percentile(t_err_float[k], 0.999);
+    const double worst = percentile(t_err_float[k], 1.0);
+    MESSAGE(name(kTests[k]) << " float t relative error: median " << median << ", p99.9 " << p999
+                            << ", max " << worst << " over " << t_err_float[k].size() << " hits");
+    CHECK(median < 2e-7);
+    CHECK(worst < 1e-5);
+  }
+  MESSAGE("double t relative error, max over all tests: " << t_err_double_max);
+  CHECK(t_err_double_max < 1e-13);
+}
+
+// Unconditioned input (slivers, grazing rays, far origins): no NaN, hits inside [tmin, tmax).
+TEST_CASE("triangle: ill-conditioned random input never yields NaN or an out-of-range t") {
+  std::mt19937 rng(7);
+  int hits = 0;
+  for (int s = 0; s < 20000; ++s) {
+    Tri tri{uniform3(rng, -1, 1), uniform3(rng, -1, 1), uniform3(rng, -1, 1)};
+    // Slivers: squash p2 toward the p0-p1 line by up to 1e-6.
+    const float squash = std::exp2(uniform(rng, -20, 0));
+    tri.p2 = tri.p0 + 0.5f * (tri.p1 - tri.p0) + squash * (tri.p2 - tri.p0 - 0.5f * (tri.p1 - tri.p0));
+    const Vec3f org = uniform3(rng, -100, 100);
+    const Vec3f target = tri.p0 + uniform(rng, 0, 0.5f) * (tri.p1 - tri.p0) + uniform(rng, 0, 0.5f) * (tri.p2 - tri.p0);
+    // Grazing: pull the direction into the plane.
+    Vec3f dir = target - org;
+    const Vec3f n = glm::normalize(glm::cross(tri.p1 - tri.p0, tri.p2 - tri.p0));
+    if (s % 2) dir -= (1 - std::exp2(uniform(rng, -20, 0))) * glm::dot(dir, n) * n;
+    const RayT<float> ray{org, 0.0f, dir, kInf};
+    for (TriangleTest test : kTests) {
+      TriHit<float> h{};
+      if (!run(test, ray, tri, h)) continue;
+      ++hits;
+      CAPTURE(name(test));
+      CHECK(std::isfinite(h.t));
+      CHECK(h.t >= ray.tmin);
+      CHECK(std::isfinite(h.u));
+      CHECK(std::isfinite(h.v));
+    }
+  }
+  CHECK(hits > 10000);
+}
+
+// ---- adversarial ------------------------------------------------------------------------------
+
+// Random triangles with small integer coordinates, rays aimed exactly at a vertex, an edge
+// midpoint or an edge point at k/8, from an origin offset by (a, b, +-8) (a permutation of it):
+// the dominant direction component is a power of two, so the shear is exact and the
+// watertight test decides exactly. Such targets are on the boundary: watertight must hit.
+TEST_CASE("triangle: rays exactly at vertices and edge points of float-exact triangles") {
+  std::mt19937 rng(99);
+  std::uniform_int_distribution<int> coord(-8, 8), off(-7, 7), axis(0, 2), sign(0, 1), eighth(1, 7);
+  int rays = 0, misses[3] = {}, vertex_hits_checked = 0;
+  while (rays < 3000) {
+    const Tri tri{Vec3f(coord(rng), coord(rng), coord(rng)), Vec3f(coord(rng), coord(rng), coord(rng)),
+                  Vec3f(coord(rng), coord(rng), coord(rng))};
+    if (is_degenerate(tri.p0, tri.p1, tri.p2)) continue;
+    const Vec3f p[3] = {tri.p0, tri.p1, tri.p2};
+    const int which = rays % 3;
+    const int i = axis(rng), j = (i + 1) % 3;
+    Vec3f target;
+    float want_u = -1, want_v = -1;  // expected barycentrics for vertex targets
+    if (which == 0) {
+      target = p[i];
+      want_u = i == 1 ? 1.0f : 0.0f;
+      want_v = i == 2 ? 1.0f : 0.0f;
+    } else if (which == 1) {
+      target = 0.5f * (p[i] + p[j]);
+    } else {
+      target = p[i] + (float(eighth(rng)) / 8) * (p[j] - p[i]);
+    }
+    Vec3f offset(float(off(rng)), float(off(rng)), float(off(rng)));
+    offset[axis(rng)] = sign(rng) ? 8.0f : -8.0f;
+    const Vec3f org = target + offset;
+    const RayT<float> ray{org, 0.0f, target - org, kInf};
+    // Skip rays in the triangle's plane (the projected triangle is degenerate there).
+    const Vec3d n = glm::cross(Vec3d(tri.p1 - tri.p0), Vec3d(tri.p2 - tri.p0));
+    if (std::abs(glm::dot(glm::normalize(n), glm::normalize(Vec3d(ray.dir)))) < 1e-3) continue;
+    ++rays;
+    for (int k = 0; k < 3; ++k) {
+      TriHit<float> h{};
+      const bool hit = run(kTests[k], ray, tri, h);
+      misses[k] += !hit;
+      if (kTests[k] != TriangleTest::watertight) continue;
+      CAPTURE(which);
+      REQUIRE(hit);
+      CHECK(h.t == doctest::Approx(1.0).epsilon(1e-6));
+      if (want_u >= 0) {
+        CHECK(h.u == want_u);
+        CHECK(h.v == want_v);
+        ++vertex_hits_checked;
+      }
+    }
+  }
+  CHECK(misses[2] == 0);
+  CHECK(vertex_hits_checked > 500);
+  MESSAGE("boundary-aimed misses out of " << rays << ": plane " << misses[0] << ", moller "
+                                          << misses[1] << ", watertight " << misses[2]);
+}
+
+// The ray (down +z from the origin, so the shear is exact) passes 2^-46 beside the edge
+// B-C shared by two triangles. In float both products of that edge function round to
+// -(1 + 2^-22), so it is exactly 0; the double recomputation (paper, section 3.4) recovers
+// its sign, and exactly one of the two triangles takes the ray. Without the fallback both do.
+TEST_CASE("triangle: watertight decides exactly where a float edge function rounds to zero") {
+  const float e22 = std::ldexp(1.0f, -22), e23 = std::ldexp(1.0f, -23);
+  const Vec3f b(-(1 + e22), -(1 + e23), 1), c(1 + e23, 1, 1);
+  const Tri near_side{Vec3f(-1, 1, 1), b, c};  // exact edge functions all negative: inside
+  const Tri far_side{Vec3f(1, -1, 1), c, b};   // across B-C: outside by 2^-46
+  REQUIRE(float(c.x * b.y) == float(c.y * b.x));  // the float products do tie
+  const RayT<float> ray{Vec3f(0), 0.0f, Vec3f(0, 0, 1), kInf};
+  TriHit<float> hf{};
+  TriHit<double> hd{};
+  CHECK(run(TriangleTest::watertight, ray, near_side, hf));
+  CHECK_FALSE(run(TriangleTest::watertight, ray, far_side, hf));
+  CHECK(run(TriangleTest::watertight, ray, near_side, hd));
+  CHECK_FALSE(run(TriangleTest::watertight, ray, far_side, hd));
+}
+
+TEST_CASE("triangle: degenerate triangles never hit and never write NaN") {
+  const Vec3f a(1, 2, 3), e(0.5f, -0.25f, 2.0f);
+  const Tri degenerate[] = {
+      {a, a, a},                           // a single point
+      {a, a, a + e},                       // repeated vertex p0 == p1
+      {a, a + e, a + e},                   // p1 == p2
+      {a + e, a, a + e},                   // p2 == p0
+      {a, a + e, a + 2.0f * e},            // collinear, exact
+      {a, a + 2.0f * e, a + e},            // collinear, midpoint last
+      {a + 3.0f * e, a, a + 0.5f * e},     // collinear, outside the segment
+      {a, Vec3f(kNaN, 0, 0), a + e},       // NaN vertex
+      {Vec3f(0, kNaN, 0), a, a + Vec3f(0, 1, 0)},
+      {a, a + e, Vec3f(kInf, 0, 0)},       // Inf vertex
+  };
+  std::mt19937 rng(3);
+  int rays = 0;
+  for (const Tri& tri : degenerate) {
+    CHECK(is_degenerate(tri.p0, tri.p1, tri.p2));
+    std::vector<Vec3f> targets = {tri.p0, tri.p1, tri.p2, 0.5f * (tri.p0 + tri.p1), a + 0.25f * e,
+                                  a + 0.5f * e, a + 0.75f * e};
+    for (int r = 0; r < 50; ++r) targets.push_back(a + uniform(rng, -1, 3) * e);
+    for (const Vec3f& target : targets) {
+      for (int r = 0; r < 8; ++r) {
+        const Vec3f org = target + uniform3(rng, -4, 4);
+        const RayT<float> ray{org, -kInf, target - org, kInf};
+        ++rays;
+        for (TriangleTest test : kTests) {
+          CAPTURE(name(test));
+          TriHit<float> hf{-7, -7, -7};
+          TriHit<double> hd{-7, -7, -7};
+          CHECK_FALSE(run(test, ray, tri, hf));
+          CHECK_FALSE(run(test, ray, tri, hd));
+          CHECK((hf.t == -7 && hf.u == -7 && hf.v == -7));
+          CHECK((hd.t == -7 && hd.u == -7 && hd.v == -7));
+        }
+      }
+    }
+  }
+  CHECK(rays > 4000);
+  // The predicate is not trivially true.
+  CHECK_FALSE(is_degenerate(Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1e-30f, 0)));
+  CHECK_FALSE(is_degenerate(a, a + e, a + Vec3f(0, 0, 1)));
+  CHECK(is_degenerate(Vec3f(0), Vec3f(3e38f, 0, 0), Vec3f(-3e38f, 3e38f, 0)));  // overflow
+}
+
+TEST_CASE_TEMPLATE("triangle: bad rays never hit", T, float, double) {
+  const Tri tri{Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1)};
+  const RayT<float> good{Vec3f(0.25f, 0.25f, 0), 0.0f, Vec3f(0, 0, 1), kInf};
+  for (TriangleTest test : kTests) {
+    CAPTURE(name(test));
+    TriHit<T> h{};
+    REQUIRE(run(test, good, tri, h));  // the unmodified ray does hit
+    CHECK(h.t == 1);
+
+    std::vector<RayT<float>> bad;
+    for (float x : {kNaN, kInf, -kInf}) {
+      for (int c = 0; c < 3; ++c) {
+        RayT<float> r = good;
+        r.org[c] = x;
+        bad.push_back(r);
+        r = good;
+        r.dir[c] = x;
+        bad.push_back(r);
+      }
+    }
+    RayT<float> r = good;
+    r.dir = Vec3f(0);  // zero direction
+    bad.push_back(r);
+    r = good;
+    r.dir = Vec3f(-0.0f, 0.0f, -0.0f);
+    bad.push_back(r);
+    r = good;
+    r.tmin = 2;  // tmin > tmax
+    r.tmax = 0.5f;
+    bad.push_back(r);
+    r = good;
+    r.tmin = 1.5f;  // tmin > t
+    bad.push_back(r);
+    r = good;
+    r.tmin = kNaN;
+    bad.push_back(r);
+    r = good;
+    r.tmax = kNaN;
+    bad.push_back(r);
+    r = good;
+    r.tmin = kInf;
+    bad.push_back(r);
+    r = good;
+    r.dir = Vec3f(1, 0, 0);  // in a plane parallel to the triangle
+    bad.push_back(r);
+    for (const RayT<float>& b : bad) {
+      TriHit<T> hb{-7, -7, -7};
+      CHECK_FALSE(run(test, b, tri, hb));
+      CHECK((hb.t == -7 && hb.u == -7 && hb.v == -7));
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("triangle: the range is half-open, tmin <= t < tmax", T, float, double) {
+  const Tri tri{Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1)};
+  for (TriangleTest test : kTests) {
+    CAPTURE(name(test));
+    RayT<float> ray{Vec3f(0.25f, 0.25f, 0), 0.0f, Vec3f(0, 0, 1), 1.0f};
+    TriHit<T> h{};
+    CHECK_FALSE(run(test, ray, tri, h));  // t == tmax exactly
+    ray.tmax = std::nextafter(1.0f, 2.0f);
+    REQUIRE(run(test, ray, tri, h));
+    CHECK(h.t == 1);
+    ray.tmin = 1.0f;  // t == tmin exactly
+    CHECK(run(test, ray, tri, h));
+    ray.tmin = std::nextafter(1.0f, 2.0f);
+    CHECK_FALSE(run(test, ray, tri, h));
+  }
+}
+
+TEST_CASE_TEMPLATE("triangle: both facings hit", T, float, double) {
+  const Vec3f p0(-1, -1, 2), p1(3, -1, 2.5f), p2(-1, 3, 1.5f);
+  const Tri front{p0, p1, p2}, back{p0, p2, p1};
+  const Vec3f target = 0.25f * p0 + 0.25f * p1 + 0.5f * p2;
+  for (TriangleTest test : kTests) {
+    CAPTURE(name(test));
+    for (const Tri& tri : {front, back}) {
+      for (float side : {-1.0f, 1.0f}) {
+        const Vec3f org = target + side * Vec3f(0.3f, -0.2f, 4);
+        TriHit<T> h{};
+        CHECK(run(test, RayT<float>{org, 0.0f, target - org, kInf}, tri, h));
+        CHECK(h.t == doctest::Approx(1.0).epsilon(1e-6));
+      }
+    }
+  }
+}
+
+// hit point = (1-u-v) p0 + u p1 + v p2 must match org + t dir; u belongs to p1, v to p2.
+TEST_CASE("triangle: barycentric convention reconstructs the hit point") {
+  std::mt19937 rng(11);
+  int hits[3] = {};
+  for (int s = 0; s < 5000; ++s) {
+    const Sample smp = conditioned_sample(rng);
+    const Vec3d p0(smp.tri.p0), p1(smp.tri.p1), p2(smp.tri.p2);
+    for (int k = 0; k < 3; ++k) {
+      TriHit<double> hd{};
+      TriHit<float> hf{};
+      if (run(kTests[k], smp.ray, smp.tri, hd)) {
+        ++hits[k];
+        const Vec3d on_ray = Vec3d(smp.ray.org) + hd.t * Vec3d(smp.ray.dir);
+        const Vec3d on_tri = (1 - hd.u - hd.v) * p0 + hd.u * p1 + hd.v * p2;
+        CAPTURE(name(kTests[k]));
+        CHECK(glm::length(on_ray - on_tri) < 1e-12);
+      }
+      if (run(kTests[k], smp.ray, smp.tri, hf)) {
+        const Vec3d on_ray = Vec3d(smp.ray.org) + double(hf.t) * Vec3d(smp.ray.dir);
+        const Vec3d on_tri = (1 - double(hf.u) - double(hf.v)) * p0 + double(hf.u) * p1 + double(hf.v) * p2;
+        CAPTURE(name(kTests[k]));
+        CHECK(glm::length(on_ray - on_tri) < 1e-4);
+      }
+    }
+  }
+  for (int h : hits) CHECK(h > 500);
+  // Rays at (near) each vertex name it: u ~ 1 at p1, v ~ 1 at p2.
+  const Tri tri{Vec3f(0, 0, 0), Vec3f(4, 0, 0), Vec3f(0, 4, 0)};
+  const Vec3f inset[3] = {Vec3f(0.01f, 0.01f, 0), Vec3f(3.98f, 0.01f, 0), Vec3f(0.01f, 3.98f, 0)};
+  for (TriangleTest test : kTests) {
+    CAPTURE(name(test));
+    TriHit<float> h[3];
+    for (int i = 0; i < 3; ++i)
+      REQUIRE(run(test, RayT<float>{inset[i] + Vec3f(0.5f, 0.25f, 3), 0.0f, Vec3f(-0.5f, -0.25f, -3), kInf}, tri, h[i]));
+    CHECK(h[0].u < 0.01f);
+    CHECK(h[0].v < 0.01f);
+    CHECK(h[1].u > 0.99f);
+    CHECK(h[1].v < 0.01f);
+    CHECK(h[2].u < 0.01f);
+    CHECK(h[2].v > 0.99f);
+  }
+}
+
+// ---- watertightness on a closed mesh ---------------------------------------------------------
+
+struct Mesh {
+  std::vector<Vec3f> vertices;
+  std::vector<std::array<int, 3>> triangles;
+};
+
+// Surface of a k x k x k grid cube, spacing 4, every vertex jittered by an integer in
+// [-1, 1]^3: closed, indexed, non-convex, with all coordinates small integers, so vertices,
+// edge midpoints and edge points at k/8 are float-exact.
+Mesh jittered_cube(int k, std::mt19937& rng) {
+  Mesh mesh;
+  std::map<std::array<int, 3>, int> index;
+  std::uniform_int_distribution<int> jitter(-1, 1);
+  const auto vertex = [&](std::array<int, 3> g) {
+    auto [it, added] = index.emplace(g, int(mesh.vertices.size()));
+    if (added) {
+      Vec3f p;
+      for (int a = 0; a < 3; ++a) p[a] = float(4 * g[a] - 2 * k + jitter(rng));
+      mesh.vertices.push_back(p);
+    }
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side <= k; side += k) {
+      const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+      for (int a = 0; a < k; ++a) {
+        for (int b = 0; b < k; ++b) {
+          int q[4];
+          const int corner[4][2] = {{a, b}, {a + 1, b}, {a + 1, b + 1}, {a, b + 1}};
+          for (int c = 0; c < 4; ++c) {
+            std::array<int, 3> g{};
+            g[axis] = side;
+            g[ua] = corner[c][0];
+            g[va] = corner[c][1];
+            q[c] = vertex(g);
+          }
+          // Alternate the diagonal so both kinds of shared edge occur.
+          if ((a + b) % 2) {
+            mesh.triangles.push_back({q[0], q[1], q[2]});
+            mesh.triangles.push_back({q[0], q[2], q[3]});
+          } else {
+            mesh.triangles.push_back({q[0], q[1], q[3]});
+            mesh.triangles.push_back({q[1], q[2], q[3]});
+          }
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+template <class T>
+bool hits_mesh(TriangleTest test, const RayT<float>& ray, const Mesh& mesh) {
+  for (const auto& tri : mesh.triangles) {
+    TriHit<T> h{};
+    if (run(test, ray, Tri{mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]}, h))
+      return true;
+  }
+  return false;
+}
+
+TEST_CASE("triangle: watertight leaks no ray aimed at shared vertices and edges of a closed mesh") {
+  std::mt19937 rng(5);
+  const Mesh base = jittered_cube(6, rng);
+  // Every vertex is shared by 4-7 triangles; every edge by exactly 2 (closed manifold).
+  std::map<std::pair<int, int>, int> edge_use;
+  for (const auto& t : base.triangles)
+    for (int e = 0; e < 3; ++e)
+      edge_use[std::minmax(t[e], t[(e + 1) % 3])]++;
+  for (const auto& [edge, use] : edge_use) REQUIRE(use == 2);
+
+  // Targets: every vertex, and on every edge its midpoint and the points at 1/8, 3/8, 3/4.
+  std::vector<Vec3f> targets_local(base.vertices);
+  for (const auto& [edge, use] : edge_use) {
+    const Vec3f a = base.vertices[edge.first], b = base.vertices[edge.second];
+    for (float f : {0.5f, 0.125f, 0.375f, 0.75f}) targets_local.push_back(a + f * (b - a));
+  }
+  // Interior origins: dyadic ones (exact directions) and two arbitrary floats.
+  const std::vector<Vec3f> origins_local = {Vec3f(0), Vec3f(0.5f, -0.25f, 0.125f), Vec3f(3, -2, 1),
+                                            Vec3f(-5.5f, 4.25f, -2.75f), uniform3(rng, -5, 5)};
+
+  for (float shift : {0.0f, 1e3f, 1e6f}) {
+    Mesh mesh = base;
+    for (Vec3f& v : mesh.vertices) v += Vec3f(shift, -shift, shift);
+    int rays = 0, leaks[3] = {}, leaks_double[3] = {};
+    for (const Vec3f& o : origins_local) {
+      const Vec3f org = o + Vec3f(shift, -shift, shift);
+      for (const Vec3f& t : targets_local) {
+        const Vec3f target = t + Vec3f(shift, -shift, shift);
+        const RayT<float> ray{org, 0.0f, target - org, kInf};
+        ++rays;
+        for (int k = 0; k < 3; ++k) {
+          leaks[k] += !hits_mesh<float>(kTests[k], ray, mesh);
+          if (shift == 0) leaks_double[k] += !hits_mesh<double>(kTests[k], ray, mesh);
+        }
+      }
+    }
+    CAPTURE(shift);
+    MESSAGE("closed mesh (" << mesh.triangles.size() << " triangles) shifted by " << shift << ": "
+                            << rays << " rays, float leaks: plane " << leaks[0] << ", moller "
+                            << leaks[1] << ", watertight " << leaks[2]);
+    if (shift == 0)
+      MESSAGE("  double leaks: plane " << leaks_double[0] << ", moller " << leaks_double[1]
+                                       << ", watertight " << leaks_double[2]);
+    CHECK(leaks[2] == 0);
+    if (shift == 0) CHECK(leaks_double[2] == 0);
+  }
+}
+
+}  // namespace

@@ -1,0 +1,88 @@
+// SoA packets and triangle blocks: AoS conversion, inert padding, alignment, and the
+// block packing (values the oracle computes, NaN padding, degenerate lanes).
+#include "simd_test_util.h"
+
+namespace {
+
+using namespace simd_test;
+using volley::simd::HitPacket;
+using volley::simd::RayPacket;
+
+template <int K>
+void packet_round_trip() {
+  Ray rays[K];
+  for (int i = 0; i < K; ++i) rays[i] = Ray{{float(i), 1.0f, 2.0f}, 0.5f, {0.0f, -1.0f, float(i)}, 9.0f + float(i)};
+  for (int count : {0, 1, K - 1, K}) {
+    RayPacket<K> p;
+    volley::simd::load(p, rays, count);
+    CHECK(reinterpret_cast<std::uintptr_t>(&p) % 64 == 0);
+    CHECK(p.active == volley::simd::lane_bits(count));
+    for (int i = 0; i < K; ++i) {
+      const Ray r = volley::simd::ray_of(p, i);
+      if (i < count) {
+        CHECK(std::memcmp(&r, &rays[i], sizeof r) == 0);
+      } else {
+        CHECK(r.tmax == -kInf);  // inert: nothing lies in [tmin, -inf)
+        CHECK(r.dir[0] == 0.0f);
+      }
+    }
+  }
+  HitPacket<K> h;
+  volley::simd::reset(h);
+  for (int i = 0; i < K; ++i) CHECK(!volley::simd::hit_of(h, i).hit());
+  set_lane(h, 1 % K, Hit{2.0f, 0.25f, 0.5f, 42});
+  Hit out[K];
+  volley::simd::store(h, out, K);
+  CHECK(out[1 % K].prim == 42);
+  CHECK(out[1 % K].t == 2.0f);
+}
+
+}  // namespace
+
+TEST_CASE("ray packets load AoS rays, make padding lanes inert, store hits back") {
+  packet_round_trip<4>();
+  packet_round_trip<8>();
+  packet_round_trip<16>();
+}
+
+TEST_CASE_TEMPLATE("blocks hold the oracle's values, NaN padding and invalid ids", Arch, volley::simd::Sse42,
+                   volley::simd::Avx2, volley::simd::Avx512) {
+  // Packing is baseline code: no ISA needed, but the width follows Arch.
+  constexpr int W = kLanes<Arch>;
+  Generator g(1);
+  Soup soup = g.triangles(W + 2);
+  soup.add(V3(0, 0, 0), V3(1, 0, 0), V3(2, 0, 0), 999);  // zero area
+  const auto m = pack<Arch, TriangleTest::moller>(soup);
+  const auto p = pack<Arch, TriangleTest::plane>(soup);
+  const auto w = pack<Arch, TriangleTest::watertight>(soup);
+  REQUIRE(m.size() == 2);
+  for (const void* b : {(const void*)m.data(), (const void*)p.data(), (const void*)w.data()})
+    CHECK(reinterpret_cast<std::uintptr_t>(b) % 64 == 0);
+  for (std::size_t t = 0; t < soup.size(); ++t) {
+    const std::size_t b = t / W, i = t % W;
+    const V3 p0 = soup.vertex(t, 0), p1 = soup.vertex(t, 1), p2 = soup.vertex(t, 2);
+    const V3 e1 = p1 - p0, e2 = p2 - p0, n = glm::cross(e1, e2);
+    CHECK(m[b].prim[i] == soup.ids[t]);
+    CHECK(m[b].v0[0][i] == p0.x);
+    CHECK(m[b].e2[2][i] == e2.z);
+    CHECK(m[b].n[1][i] == n.y);
+    const auto pt = volley::core::PlaneTriangle<float>::from(p0, p1, p2);
+    CHECK(p[b].d[i] == pt.d);
+    CHECK(p[b].n2[0][i] == pt.n2.x);
+    CHECK(p[b].d1[i] == pt.d1);
+    if (soup.ids[t] == 999) {
+      CHECK(std::isnan(w[b].p[1][1][i]));  // zero area: a NaN lane
+    } else {
+      CHECK(w[b].p[2][1][i] == p2.y);
+    }
+  }
+  for (std::size_t t = soup.size(); t < 2 * W; ++t) {
+    const std::size_t i = t % W;
+    CHECK(m[1].prim[i] == kInvalidPrim);
+    CHECK(std::isnan(m[1].v0[0][i]));
+    CHECK(std::isnan(m[1].n[2][i]));
+    CHECK(std::isnan(p[1].d2[i]));
+    CHECK(std::isnan(w[1].p[0][0][i]));
+    CHECK(w[1].prim[i] == kInvalidPrim);
+  }
+}

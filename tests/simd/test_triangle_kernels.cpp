@@ -1,0 +1,99 @@
+// The type-erased facade (simd/triangle_kernels.h) every test x ISA: create, build with
+// groups of every awkward size, and single-ray and packet queries per group against the
+// oracle over the same group.
+#include "simd/triangle_kernels.h"
+
+#include "simd_test_util.h"
+
+namespace {
+
+using namespace simd_test;
+using volley::simd::BlockRange;
+using volley::simd::TriangleKernels;
+
+template <class Arch>
+void facade_agrees(TriangleTest test) {
+  constexpr int W = kLanes<Arch>;
+  const auto kernels = TriangleKernels::create(test, volley::simd::kIsaOf<Arch>);
+  REQUIRE(kernels);
+  CHECK(kernels->width() == W);
+  CHECK(kernels->test() == test);
+  Generator g(41);
+  const Soup soup = g.triangles(400);
+  // Groups of 0, 1, W-1, W, W+1, 2W+3 triangles and random sizes.
+  std::vector<std::uint32_t> groups{0};
+  const int sizes[] = {0, 1, W - 1, W, W + 1, 2 * W + 3};
+  for (int i = 0; groups.back() < soup.size(); ++i) {
+    const int size = i < 6 ? sizes[i] : g.integer(1, 3 * W);
+    groups.push_back(std::min<std::uint32_t>(static_cast<std::uint32_t>(soup.size()), groups.back() + size));
+  }
+  const auto ranges = kernels->build(soup.xyz.data(), soup.ids.data(), soup.size(), groups.data(), groups.size() - 1);
+  REQUIRE(ranges.size() == groups.size() - 1);
+  std::size_t blocks = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    CHECK(ranges[i].first == blocks);
+    CHECK(ranges[i].count == (groups[i + 1] - groups[i] + W - 1) / W);
+    blocks += ranges[i].count;
+  }
+  CHECK(kernels->blocks() == blocks);
+  Agreement a;
+  const std::string where = name(test) + " facade";
+  for (std::size_t gi = 0; gi < ranges.size(); ++gi) {
+    const std::size_t first = groups[gi], last = groups[gi + 1];
+    for (int p = 0; p < 8; ++p) {
+      Ray rays[volley::simd::kPacketSize];
+      for (Ray& r : rays) r = last > first ? g.aimed(soup, first + static_cast<std::size_t>(g.integer(0, int(last - first) - 1)))
+                                           : g.aimed(soup, 0);
+      volley::simd::Packet packet;
+      volley::simd::load(packet, rays, volley::simd::kPacketSize - (p % 2));
+      volley::simd::PacketHits hits;
+      volley::simd::reset(hits);
+      kernels->intersect(packet, ranges[gi], hits);
+      const std::uint32_t occ = kernels->occluded(packet, ranges[gi], packet.active);
+      for (int i = 0; i < volley::simd::kPacketSize; ++i) {
+        const Ray r = volley::simd::ray_of(packet, i);
+        const bool active = packet.active >> i & 1;
+        const Hit want = active ? oracle_closest(test, r, Hit{}, soup, first, last) : Hit{};
+        a.check(volley::simd::hit_of(hits, i), want, r, where + " packet");
+        a.check_bool(occ >> i & 1, active && oracle_occluded(test, r, soup, first, last), r, where + " packet occluded");
+        if (!active) continue;
+        Hit single;
+        kernels->intersect(r, ranges[gi], single);
+        a.check(single, want, r, where + " single");
+        Hit prepared;
+        kernels->intersect(kernels->prepare(r), ranges[gi], prepared);
+        a.check(prepared, want, r, where + " prepared");
+        a.check_bool(kernels->occluded(r, ranges[gi]), oracle_occluded(test, r, soup, first, last), r,
+                     where + " occluded");
+      }
+    }
+  }
+  INFO(a.first);
+  CHECK(a.mismatches == 0);
+  CHECK(a.hits > a.compared / 10);
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("TriangleKernels facade agrees with the oracle per group", Arch, volley::simd::Sse42,
+                   volley::simd::Avx2, volley::simd::Avx512) {
+  if (skip_isa<Arch>()) return;
+  for (TriangleTest test : kTests) {
+    INFO(name(test));
+    facade_agrees<Arch>(test);
+  }
+}
+
+TEST_CASE("TriangleKernels::create rejects unresolved ISAs and bad groups") {
+  CHECK_THROWS_AS(TriangleKernels::create(TriangleTest::moller, volley::Isa::automatic), std::invalid_argument);
+  CHECK_THROWS_AS(TriangleKernels::create(TriangleTest::moller, volley::Isa::scalar), std::invalid_argument);
+  const auto k = TriangleKernels::create(TriangleTest::watertight, volley::simd::best_isa());
+  REQUIRE(k);
+  Soup soup;
+  soup.add(V3(0, 0, 0), V3(1, 0, 0), V3(0, 1, 0));
+  const std::uint32_t bad[] = {0, 2};  // past n = 1
+  CHECK_THROWS_AS(k->build(soup.xyz.data(), soup.ids.data(), 1, bad, 1), std::invalid_argument);
+  const std::uint32_t none[] = {0};
+  CHECK(k->build(soup.xyz.data(), soup.ids.data(), 1, none, 0).empty());
+  CHECK(k->bytes() == 0);
+}
