@@ -1,5 +1,7 @@
 #include "accel/accel_impl.h"
 
+#include <cstdlib>
+
 #include "core/bvh_traverse.h"
 
 namespace volley {
@@ -29,6 +31,14 @@ void Accel::Impl::build() {
       continue;
     }
     boxes[i] = triangle_box(p);
+  }
+  build_options = core::BvhBuildOptions{};
+  if (isa != Isa::scalar) {
+    // A leaf costs one block test per W triangles: allow leaves up to a full block and
+    // price a triangle at a fraction of a node visit so the SAH fills the lanes.
+    const int w = isa == Isa::avx512 ? 16 : isa == Isa::avx2 ? 8 : 4;
+    build_options.max_leaf_size = w;
+    build_options.intersection_cost = std::getenv("VOLLEY_LEAF_COST") ? std::atof(std::getenv("VOLLEY_LEAF_COST")) : 1.0f;
   }
   triangle_bvh = n ? core::build_bvh(boxes, build_options) : core::Bvh{};
 
