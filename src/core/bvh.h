@@ -75,7 +75,7 @@ struct BvhStats {
 
 /// Statistics of a BVH. sah_cost = (traversal_cost * sum over interior nodes of A(node)
 /// + intersection_cost * sum over leaves of A(leaf) * count) / A(root), A = half area;
-/// NaN when the root's area is 0 or infinite (and the tree has more than one node).
+/// NaN when the root's area is 0 or infinite. Depth counts edges (a lone root leaf: 0).
 BvhStats bvh_stats(const Bvh& bvh, const BvhBuildOptions& options = {});
 
 }  // namespace volley::core

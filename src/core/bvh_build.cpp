@@ -7,6 +7,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -377,9 +378,16 @@ class Builder {
       lc.extend(_mm_blendv_ps(pos_inf, c, is_left), _mm_blendv_ps(neg_inf, c, is_left));
       rc.extend(_mm_blendv_ps(c, pos_inf, is_left), _mm_blendv_ps(c, neg_inf, is_left));
     }
+    // Child bounds from the bins; the partition recomputed the same bin indices.
     Box4 lbox, rbox;
-    for (int b = 0; b <= best_bin; ++b) lbox.extend(bins_[a * nbins_ + b]);
+    std::uint32_t left_count = 0;
+    for (int b = 0; b <= best_bin; ++b) {
+      lbox.extend(bins_[a * nbins_ + b]);
+      left_count += bin_count_[a * nbins_ + b];
+    }
     for (int b = best_bin + 1; b < nb; ++b) rbox.extend(bins_[a * nbins_ + b]);
+    assert(mid - t.begin == left_count && "partition disagrees with the bins");
+    (void)left_count;
     split(t, mid, lbox.to_bbox(), rbox.to_bbox(), lc.to_bbox(), rc.to_bbox());
   }
 

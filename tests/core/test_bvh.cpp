@@ -463,15 +463,32 @@ TEST_CASE("bvh: closest and any hit equal brute force on random triangle soups")
     std::size_t tris, rays;
     BvhBuildOptions opt;
   };
-  for (const Case& c : {Case{1000, 3000, {}}, Case{10000, 1000, {}}, Case{10000, 500, {2, 1, 1, 1, 1}},
-                        Case{10000, 500, {32, 16, 4, 1, 1}}, Case{50000, 300, {}}}) {
+  for (const Case& c : {Case{1000, 3000, {}}, Case{10000, 600, {}}, Case{10000, 300, {2, 1, 1, 1, 1}},
+                        Case{10000, 300, {32, 16, 4, 1, 1}}, Case{50000, 200, {}}}) {
     CAPTURE(c.tris);
     CAPTURE(c.opt.max_leaf_size);
     const Soup soup = random_soup(c.tris, rng);
     const std::vector<BBox> boxes = soup.boxes();
     const Bvh bvh = volley::core::build_bvh(boxes, c.opt);
     check_structure(bvh, boxes, c.opt);
-    const Agreement g = compare_with_brute_force(bvh, soup, random_rays(bounds_of(boxes), c.rays, rng));
+    const std::vector<Ray> rays = random_rays(bounds_of(boxes), c.rays, rng);
+    // Traversal hands every primitive whose box the ray touches to the leaf callback,
+    // also for rays aimed exactly at box edges and corners (where an unpadded slab
+    // test skips boxes, see above).
+    std::vector<Ray> edge_rays = rays;
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    for (std::size_t i = 0; i < c.rays; ++i) {
+      const BBox& b = boxes[rng() % boxes.size()];
+      glm::vec3 target;
+      const int free_axis = static_cast<int>(rng() % 4);  // 3: a corner
+      for (int a = 0; a < 3; ++a)
+        target[a] = a == free_axis ? b.lo[a] + unit(rng) * (b.hi[a] - b.lo[a])
+                                   : (rng() % 2 ? b.hi[a] : b.lo[a]);
+      edge_rays.push_back({rays[i].org, 0, target - rays[i].org, kInf});
+    }
+    std::size_t touched = 0;
+    CHECK(count_skipped_boxes(bvh, boxes, edge_rays, touched) == 0);
+    const Agreement g = compare_with_brute_force(bvh, soup, rays);
     CHECK(g.hits > c.rays / 4);  // the generator really makes both
     CHECK(g.misses > c.rays / 20);
     CHECK(g.closest_wrong == 0);
@@ -775,10 +792,10 @@ TEST_CASE("bvh: shared meshes (bunny, teapot) against brute force") {
     // bounds in random directions, and random rays (misses).
     std::mt19937 rng(5);
     const BBox bounds = bounds_of(boxes);
-    std::vector<Ray> rays = random_rays(bounds, 600, rng);
+    std::vector<Ray> rays = random_rays(bounds, 300, rng);
     std::uniform_int_distribution<std::uint32_t> pick(0, static_cast<std::uint32_t>(soup.size() - 1));
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-    for (int i = 0; i < 600; ++i) {
+    for (int i = 0; i < 300; ++i) {
       const std::uint32_t p = pick(rng);
       const glm::vec3 target = (soup.v[3 * p] + soup.v[3 * p + 1] + soup.v[3 * p + 2]) / 3.0f;
       const glm::vec3 org = bounds.center() + 2.0f * glm::length(bounds.diagonal()) *
@@ -787,8 +804,8 @@ TEST_CASE("bvh: shared meshes (bunny, teapot) against brute force") {
     }
     const Agreement g = compare_with_brute_force(bvh, soup, rays);
     MESSAGE(name, ": ", g.rays, " rays, ", g.hits, " hits, ", g.tie_prims, " ties at equal t");
-    CHECK(g.hits > 600);
-    CHECK(g.misses > 50);
+    CHECK(g.hits > 300);
+    CHECK(g.misses > 25);
     CHECK(g.closest_wrong == 0);
     CHECK(g.any_wrong == 0);
   }
