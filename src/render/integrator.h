@@ -1,25 +1,29 @@
-// The two integrators: Whitted (the notes' recursive ray tracer) and a path tracer for
-// diffuse interreflection. Both take a camera ray and return linear RGB radiance.
+// The two integrators as shading steps of the wavefront renderer: each takes one traced
+// ray and its hit, returns the light that reaches the pixel directly (already weighted),
+// and queues shadow rays and the rays of the next bounce.
 #pragma once
+#include <vector>
+
 #include <glm/glm.hpp>
 
-#include "render/rng.h"
+#include "render/path_state.h"
 #include "render/scene.h"
-#include "render/stats.h"
 
 namespace volley::render {
 
 enum class IntegratorKind { whitted, path };
 
-/// Whitted: emission + ambient + Phong from each visible light, plus mirror reflection
-/// and Fresnel-weighted refraction (total internal reflection handled) recursively up to
-/// max_depth bounces.
-glm::vec3 trace_whitted(const Scene& scene, const Ray& ray, int max_depth, RayStats& stats);
+/// Whitted (1980), the notes' ray tracer: emission + ambient + Phong from each visible
+/// light, plus a mirror ray and Fresnel-weighted (Schlick) refraction and reflection rays,
+/// total internal reflection handled, up to max_depth bounces.
+glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
+                        std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
 
-/// Path tracing: at each vertex emission + Phong direct light from the point lights (next
+/// Path tracing (Kajiya 1986): emission + Phong direct light from the point lights (next
 /// event estimation), then one scattering event chosen by albedo: cosine-weighted diffuse,
-/// mirror, or Fresnel-chosen reflection/refraction; Russian roulette after 3 bounces.
-/// No ambient term: indirect light replaces it.
-glm::vec3 trace_path(const Scene& scene, const Ray& ray, int max_depth, Rng& rng, RayStats& stats);
+/// mirror, or Fresnel-chosen reflection/refraction; Russian roulette after 3 bounces. No
+/// ambient term: indirect light replaces it.
+glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
+                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
 
 }  // namespace volley::render

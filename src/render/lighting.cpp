@@ -7,12 +7,11 @@
 
 namespace volley::render {
 
-glm::vec3 direct_lighting(const Scene& scene, const SurfacePoint& s, const glm::vec3& view_dir,
-                          RayStats& stats) {
+void queue_direct_lighting(const Scene& scene, const SurfacePoint& s, const glm::vec3& view_dir,
+                           const glm::vec3& weight, std::uint32_t pixel, std::vector<ShadowQuery>& out) {
   const io::Material& m = scene.materials()[s.material];
   const bool specular = m.specular != glm::vec3(0.0f);
-  if (m.diffuse == glm::vec3(0.0f) && !specular) return glm::vec3(0.0f);  // nothing to light
-  glm::vec3 sum(0.0f);
+  if (m.diffuse == glm::vec3(0.0f) && !specular) return;  // nothing to light
   for (const io::PointLight& light : scene.lights()) {
     const glm::vec3 to_light = light.position - s.p;
     const float dist2 = glm::dot(to_light, to_light);
@@ -21,16 +20,13 @@ glm::vec3 direct_lighting(const Scene& scene, const SurfacePoint& s, const glm::
     if (glm::dot(l, s.ng) <= 0.0f) continue;
     const float n_dot_l = glm::dot(s.ns, l);
     if (n_dot_l <= 0.0f) continue;
-    stats.add(RayKind::shadow);
-    if (scene.accel().occluded(spawn_shadow_ray(s.p, s.p_error, s.ng, light.position))) continue;
     glm::vec3 c = m.diffuse * n_dot_l;
     if (specular) {
       const float r_dot_v = glm::dot(reflect(-l, s.ns), -view_dir);
       if (r_dot_v > 0.0f) c += m.specular * std::pow(r_dot_v, m.shininess);
     }
-    sum += c * light.intensity / dist2;
+    out.push_back({spawn_shadow_ray(s.p, s.p_error, s.ng, light.position), weight * c * light.intensity / dist2, pixel});
   }
-  return sum;
 }
 
 }  // namespace volley::render

@@ -1,90 +1,70 @@
-// Path tracing for diffuse interreflection (Kajiya 1986), next-event estimation to the
-// point lights, one scattering event per vertex chosen by albedo.
+// Path tracing for diffuse interreflection, next-event estimation to the point lights,
+// one scattering event per vertex chosen by albedo.
 #include <cmath>
 
 #include "render/integrator.h"
 #include "render/lighting.h"
 #include "render/optics.h"
+#include "render/sampling.h"
 #include "render/spawn.h"
 
 namespace volley::render {
-namespace {
 
-float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
+                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
+  if (!hit.hit()) return path.weight * scene.background();
+  const Ray& ray = path.ray;
+  const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
+  const SurfacePoint s = scene.surface(ray, hit);
+  const io::Material& m = scene.materials()[s.material];
+  queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
+  const glm::vec3 emitted = path.weight * m.emission;
+  if (int(path.depth) >= max_depth) return emitted;
 
-// Cosine-weighted direction about unit n (Malley's method).
-glm::vec3 cosine_direction(const glm::vec3& n, Rng& rng) {
-  const float r = std::sqrt(rng.uniform());
-  const float phi = 6.28318530718f * rng.uniform();
-  // Orthonormal basis (Duff et al. 2017).
-  const float sign = std::copysign(1.0f, n.z);
-  const float a = -1.0f / (sign + n.z);
-  const float b = n.x * n.y * a;
-  const glm::vec3 t(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
-  const glm::vec3 bt(b, sign + n.y * n.y * a, -n.y);
-  const float z = std::sqrt(std::max(0.0f, 1.0f - r * r));
-  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * bt + z * n);
-}
-
-}  // namespace
-
-glm::vec3 trace_path(const Scene& scene, const Ray& camera_ray, int max_depth, Rng& rng, RayStats& stats) {
-  glm::vec3 radiance(0.0f);
-  glm::vec3 throughput(1.0f);
-  Ray ray = camera_ray;
-  for (int depth = 0;; ++depth) {
-    const Hit hit = scene.accel().intersect(ray);
-    if (!hit.hit()) {
-      radiance += throughput * scene.background();
-      break;
-    }
-    const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-    const SurfacePoint s = scene.surface(ray, hit);
-    const io::Material& m = scene.materials()[s.material];
-    radiance += throughput * (m.emission + direct_lighting(scene, s, d, stats));
-    if (depth >= max_depth) break;
-
-    // Pick one event with probability albedo_i / max(sum, 1): absorption takes the rest,
-    // and the weight albedo_i / P(i) keeps the estimate unbiased.
-    const float pd = luminance(m.diffuse), pm = luminance(m.mirror), pt = luminance(m.transmittance);
-    float scale = std::max(pd + pm + pt, 1.0f);
-    if (depth >= 3) {  // Russian roulette on the path throughput
-      const float q = std::min(0.95f, std::max(throughput.r, std::max(throughput.g, throughput.b)));
-      if (rng.uniform() >= q) break;
-      throughput /= q;
-    }
-    const float x = rng.uniform() * scale;
-    glm::vec3 w;
-    if (x < pd) {
-      w = cosine_direction(s.ns, rng);
-      if (glm::dot(w, s.ng) <= 0.0f) break;  // shading normal sent it below the surface
-      throughput *= m.diffuse * (scale / pd);
-      stats.add(RayKind::diffuse);
-    } else if (x < pd + pm) {
-      w = reflect(d, s.ns);
-      if (glm::dot(w, s.ng) <= 0.0f) w = reflect(d, s.ng);
-      throughput *= m.mirror * (scale / pm);
-      stats.add(RayKind::reflection);
-    } else if (x < pd + pm + pt) {
-      const float eta_i = s.front ? 1.0f : m.ior;
-      const float eta_t = s.front ? m.ior : 1.0f;
-      const auto t = refract(d, s.ns, eta_i, eta_t);
-      const float f = t ? schlick(-glm::dot(d, s.ns), -glm::dot(*t, s.ns), eta_i, eta_t) : 1.0f;
-      if (rng.uniform() < f) {
-        w = reflect(d, s.ns);
-        if (glm::dot(w, s.ng) <= 0.0f) w = reflect(d, s.ng);
-        stats.add(RayKind::reflection);
-      } else {
-        w = *t;
-        stats.add(RayKind::refraction);
-      }
-      throughput *= m.transmittance * (scale / pt);
-    } else {
-      break;  // absorbed
-    }
-    ray = spawn_ray(s.p, s.p_error, s.ng, w);
+  PathState out{ray, path.weight, path.pixel, path.depth + 1, RayKind::diffuse, path.rng};
+  Rng& rng = out.rng;
+  // Pick one event with probability albedo_i / max(sum, 1): absorption takes the rest,
+  // and the weight albedo_i / P(i) keeps the estimate unbiased.
+  const float pd = luminance(m.diffuse), pm = luminance(m.mirror), pt = luminance(m.transmittance);
+  const float scale = std::max(pd + pm + pt, 1.0f);
+  if (path.depth >= 3) {  // Russian roulette on the path throughput
+    const float q = std::min(0.95f, std::max(out.weight.r, std::max(out.weight.g, out.weight.b)));
+    if (rng.uniform() >= q) return emitted;
+    out.weight /= q;
   }
-  return radiance;
+  auto mirror_direction = [&]() {
+    const glm::vec3 r = reflect(d, s.ns);
+    return glm::dot(r, s.ng) > 0.0f ? r : reflect(d, s.ng);
+  };
+  const float x = rng.uniform() * scale;
+  glm::vec3 w;
+  if (x < pd) {
+    w = cosine_direction(s.ns, rng);
+    if (glm::dot(w, s.ng) <= 0.0f) return emitted;  // the shading normal sent it below the surface
+    out.weight *= m.diffuse * (scale / pd);
+  } else if (x < pd + pm) {
+    w = mirror_direction();
+    out.weight *= m.mirror * (scale / pm);
+    out.kind = RayKind::reflection;
+  } else if (x < pd + pm + pt) {
+    const float eta_i = s.front ? 1.0f : m.ior;
+    const float eta_t = s.front ? m.ior : 1.0f;
+    const auto t = refract(d, s.ns, eta_i, eta_t);
+    const float f = t ? schlick(-glm::dot(d, s.ns), -glm::dot(*t, s.ns), eta_i, eta_t) : 1.0f;
+    if (rng.uniform() < f) {
+      w = mirror_direction();
+      out.kind = RayKind::reflection;
+    } else {
+      w = *t;
+      out.kind = RayKind::refraction;
+    }
+    out.weight *= m.transmittance * (scale / pt);
+  } else {
+    return emitted;  // absorbed
+  }
+  out.ray = spawn_ray(s.p, s.p_error, s.ng, w);
+  next.push_back(out);
+  return emitted;
 }
 
 }  // namespace volley::render

@@ -1,3 +1,7 @@
+// The wavefront renderer: per 16x16 tile and sample, all camera rays are traced as one
+// stream (in 4x4 pixel blocks, so each run of 16 is a coherent packet), the hits shaded,
+// shadow rays traced as one occlusion stream, and the surviving secondary rays (dead ones
+// dropped) traced as the next bounce's stream.
 #include "render/renderer.h"
 
 #include <atomic>
@@ -5,22 +9,104 @@
 #include <cmath>
 #include <mutex>
 
-#include <tbb/global_control.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include "render/path_state.h"
 
 namespace volley::render {
 namespace {
 
 constexpr int kTile = 16;
+constexpr int kBlock = 4;
 
 // Stratified sub-pixel offsets in [-0.5, 0.5): an n x n grid (n = ceil(sqrt(spp))), one
-// jittered sample per used cell.
+// jittered sample per used cell; the pixel centre for 1 spp (the notes' model).
 glm::vec2 jitter(int sample, int spp, Rng& rng) {
   if (spp == 1) return {0.0f, 0.0f};
   const int n = int(std::ceil(std::sqrt(float(spp))));
   const int sx = sample % n, sy = sample / n;
   return {(float(sx) + rng.uniform()) / float(n) - 0.5f, (float(sy) + rng.uniform()) / float(n) - 0.5f};
+}
+
+// Buffers of one tile, reused across samples and bounces.
+struct TileWork {
+  std::vector<PathState> paths, next;
+  std::vector<ShadowQuery> shadows;
+  std::vector<Ray> rays;
+  std::vector<Hit> hits;
+  std::vector<std::uint8_t> blocked;
+  std::vector<glm::vec3> sum;
+  RayStats stats;
+};
+
+void trace_paths(const Accel& accel, TileWork& w) {
+  const std::size_t n = w.paths.size();
+  w.rays.resize(n);
+  w.hits.assign(n, Hit{});
+  for (std::size_t i = 0; i < n; ++i) {
+    w.rays[i] = w.paths[i].ray;
+    w.stats.add(w.paths[i].kind);
+  }
+  for (std::size_t i = 0; i < n; ++i) w.hits[i] = accel.intersect(w.rays[i]);
+}
+
+void trace_shadows(const Accel& accel, TileWork& w) {
+  const std::size_t n = w.shadows.size();
+  if (n == 0) return;
+  w.rays.resize(n);
+  w.blocked.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) w.rays[i] = w.shadows[i].ray;
+  w.stats.add(RayKind::shadow, n);
+  for (std::size_t i = 0; i < n; ++i) w.blocked[i] = accel.occluded(w.rays[i]);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!w.blocked[i]) w.sum[w.shadows[i].pixel] += w.shadows[i].contribution;
+}
+
+void render_tile(const Scene& scene, const RenderOptions& options, int x0, int y0, TileWork& w, Image& image) {
+  const core::Camera& camera = scene.camera();
+  const int x1 = std::min(x0 + kTile, camera.width()), y1 = std::min(y0 + kTile, camera.height());
+  w.sum.assign(kTile * kTile, glm::vec3(0.0f));
+  for (int s = 0; s < options.spp; ++s) {
+    // Camera rays in 4x4 pixel blocks.
+    w.paths.clear();
+    for (int by = y0; by < y1; by += kBlock)
+      for (int bx = x0; bx < x1; bx += kBlock)
+        for (int y = by; y < std::min(by + kBlock, y1); ++y)
+          for (int x = bx; x < std::min(bx + kBlock, x1); ++x) {
+            const std::uint64_t pixel = std::uint64_t(y) * camera.width() + x;
+            PathState p;
+            p.rng = Rng(options.seed, pixel * std::uint64_t(options.spp) + s);
+            const glm::vec2 j = jitter(s, options.spp, p.rng);
+            const auto r = camera.ray(float(x) + j.x, float(y) + j.y);
+            p.ray = Ray{{r.org.x, r.org.y, r.org.z}, r.tmin, {r.dir.x, r.dir.y, r.dir.z}, r.tmax};
+            p.pixel = std::uint32_t((y - y0) * kTile + (x - x0));
+            w.paths.push_back(p);
+          }
+    // Bounces until no ray survives.
+    while (!w.paths.empty()) {
+      trace_paths(scene.accel(), w);
+      w.next.clear();
+      w.shadows.clear();
+      for (std::size_t i = 0; i < w.paths.size(); ++i) {
+        const PathState& p = w.paths[i];
+        const glm::vec3 c = options.integrator == IntegratorKind::path
+                                ? shade_path(scene, p, w.hits[i], options.max_depth, w.next, w.shadows)
+                                : shade_whitted(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
+        w.sum[p.pixel] += c;
+      }
+      trace_shadows(scene.accel(), w);
+      std::swap(w.paths, w.next);
+    }
+  }
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      glm::vec3 c = w.sum[(y - y0) * kTile + (x - x0)] / float(options.spp);
+      // A NaN or inf would poison the image: show it black rather than propagate it.
+      if (!(std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b))) c = glm::vec3(0.0f);
+      image.pixels[std::size_t(y) * image.width + x] = c;
+    }
 }
 
 }  // namespace
@@ -34,40 +120,24 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const int tile_count = tiles_x * tiles_y;
 
   std::mutex merge;
-  std::atomic<int> done{0};
+  int done = 0;
+  tbb::enumerable_thread_specific<TileWork> work_per_thread;
   const auto start = std::chrono::steady_clock::now();
-  auto render_tile = [&](int tile) {
-    RayStats stats;
-    const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
-    for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
-      for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-        const std::uint64_t pixel = std::uint64_t(y) * width + x;
-        glm::vec3 sum(0.0f);
-        for (int s = 0; s < options.spp; ++s) {
-          Rng rng(options.seed, pixel * std::uint64_t(options.spp) + s);
-          const glm::vec2 j = jitter(s, options.spp, rng);
-          const auto r = camera.ray(float(x) + j.x, float(y) + j.y);
-          const Ray ray{{r.org.x, r.org.y, r.org.z}, r.tmin, {r.dir.x, r.dir.y, r.dir.z}, r.tmax};
-          stats.add(RayKind::primary);
-          const glm::vec3 c = options.integrator == IntegratorKind::path
-                                  ? trace_path(scene, ray, options.max_depth, rng, stats)
-                                  : trace_whitted(scene, ray, options.max_depth, stats);
-          // A NaN or inf sample would poison the pixel: drop it (counted as black).
-          if (std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b)) sum += c;
-        }
-        result.image.pixels[pixel] = sum / float(options.spp);
-      }
-    }
-    std::lock_guard lock(merge);
-    result.stats += stats;
-    const int n = ++done;
-    if (options.progress) options.progress(double(n) / tile_count);
-  };
-
   const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(0, tile_count, [&](int tile) { render_tile(tile); }, tbb::simple_partitioner());
+    tbb::parallel_for(
+        0, tile_count,
+        [&](int tile) {
+          TileWork& work = work_per_thread.local();
+          work.stats = RayStats{};
+          render_tile(scene, options, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, work, result.image);
+          std::lock_guard lock(merge);
+          result.stats += work.stats;
+          ++done;
+          if (options.progress) options.progress(double(done) / tile_count);
+        },
+        tbb::simple_partitioner());
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
