@@ -30,7 +30,7 @@ void fill_lane(MollerBlock<W>& b, int i, const V3& p0, const V3& p1, const V3& p
   const V3 e1 = p1 - p0, e2 = p2 - p0;
   put<W>(b.v0, i, p0);
   put<W>(b.e1, i, e1);
-  put<W>(b.e2, i, e2);
+  put<W>(b.ne2, i, -e2);
   put<W>(b.n, i, glm::cross(e1, e2));
 }
 

@@ -18,6 +18,7 @@
 #include "simd/kernel_common.h"
 #include "simd/moller.h"
 #include "simd/plane.h"
+#include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/ray_packet.h"
 #include "simd/triangle_blocks.h"
@@ -61,8 +62,9 @@ struct RayBlockKernels {
   static bool occluded(const PreparedRay& ray, const Block* blocks, std::uint32_t count);
 };
 
-/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles.
-/// Only lanes whose `active` bit is set are tested and written.
+/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles. The packet is
+/// prepared once (prepare) and then reused for every call. Only lanes whose `active` bit
+/// is set are tested and written.
 template <class Arch, TriangleTest Test, int K>
 struct PacketKernels {
   static constexpr int W = kLanes<Arch>;
@@ -70,14 +72,16 @@ struct PacketKernels {
   static_assert(K % L == 0, "K rays per packet must be a multiple of the lane count");
   using Block = BlockFor<Test, W>;
 
+  /// Per-lane precomputation of Test for `rays` (the Woop shear for watertight).
+  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
   /// Closest hit of every active lane over blocks[0 .. count) (semantics as in
   /// RayBlockKernels::intersect, per lane).
-  static void intersect(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits);
+  static void intersect(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits);
   /// Closest hit of every active lane against triangle j of `block` alone.
-  static void intersect_triangle(const RayPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
-  /// The lanes of `active` (a subset of rays.active) that some triangle of
+  static void intersect_triangle(const PreparedPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
+  /// The lanes of `active` (ANDed with rays.rays.active) that some triangle of
   /// blocks[0 .. count) occludes (tmin <= t < tmax). Stops as soon as all are occluded.
-  static std::uint32_t occluded(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count,
+  static std::uint32_t occluded(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count,
                                 std::uint32_t active);
 };
 
@@ -91,10 +95,11 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
   static_assert(B::size == W, "kLanes<Arch> must be the float lane count");
   const auto rays = T::broadcast(ray);
   float upper = hit.t < ray.ray.tmax ? hit.t : ray.ray.tmax;
+  B upper_b(upper);
   for (std::uint32_t b = 0; b < count; ++b) {
     const Block& block = blocks[b];
     // Test all W triangles against the current upper end.
-    const auto cand = T::test(rays, T::load_block(block, rays), B(upper));
+    const auto cand = T::test(rays, T::load_block(block, rays), upper_b);
     std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
     if (bits == 0) continue;
     alignas(64) float ts[W], us[W], vs[W];
@@ -106,9 +111,10 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
     int lane = std::countr_zero(bits);
     for (;;) {
       upper = ts[lane];
+      upper_b = B(upper);
       bits &= ~((2u << lane) - 1u);  // lanes after `lane`
       if (bits == 0) break;
-      bits &= detail::bits_from_mask<Arch>(T::accept(cand, B(upper)));
+      bits &= detail::bits_from_mask<Arch>(T::accept(cand, upper_b));
       if (bits == 0) break;
       lane = std::countr_zero(bits);
     }
@@ -131,17 +137,23 @@ bool RayBlockKernels<Arch, Test>::occluded(const PreparedRay& ray, const Block* 
 }
 
 template <class Arch, TriangleTest Test, int K>
-void PacketKernels<Arch, Test, K>::intersect(const RayPacket<K>& rays, const Block* blocks, std::uint32_t count,
+void PacketKernels<Arch, Test, K>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+  detail::TestOf<Arch, Test>::template prepare<K>(rays, out);
+}
+
+template <class Arch, TriangleTest Test, int K>
+void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, const Block* blocks, std::uint32_t count,
                                              HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
+  const RayPacket<K>& rays = prepared.rays;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
     if (act_bits == 0) continue;
     const M act = detail::mask_from_bits<Arch>(act_bits);
-    const auto r = T::template load<K>(rays, c);
+    const auto r = T::template load<K>(prepared, c);
     // Inactive lanes search [tmin, -inf): never hit.
     B upper = xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
                             B(-std::numeric_limits<float>::infinity()));
@@ -169,16 +181,17 @@ void PacketKernels<Arch, Test, K>::intersect(const RayPacket<K>& rays, const Blo
 }
 
 template <class Arch, TriangleTest Test, int K>
-void PacketKernels<Arch, Test, K>::intersect_triangle(const RayPacket<K>& rays, const Block& block, int j,
+void PacketKernels<Arch, Test, K>::intersect_triangle(const PreparedPacket<K>& prepared, const Block& block, int j,
                                                       HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
+  const RayPacket<K>& rays = prepared.rays;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
     if (act_bits == 0) continue;
     const M act = detail::mask_from_bits<Arch>(act_bits);
-    const auto r = T::template load<K>(rays, c);
+    const auto r = T::template load<K>(prepared, c);
     const B ht = B::load_aligned(hits.t + c);
     const B upper = xsimd::select(act, detail::upper_bound(ht, B::load_aligned(rays.tmax + c)),
                                   B(-std::numeric_limits<float>::infinity()));
@@ -193,18 +206,19 @@ void PacketKernels<Arch, Test, K>::intersect_triangle(const RayPacket<K>& rays, 
 }
 
 template <class Arch, TriangleTest Test, int K>
-std::uint32_t PacketKernels<Arch, Test, K>::occluded(const RayPacket<K>& rays, const Block* blocks,
+std::uint32_t PacketKernels<Arch, Test, K>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
                                                      std::uint32_t count, std::uint32_t active) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
+  const RayPacket<K>& rays = prepared.rays;
   std::uint32_t result = 0;
   active &= rays.active;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (active >> c) & ((2u << (L - 1)) - 1u);
     if (act_bits == 0) continue;
     const M act = detail::mask_from_bits<Arch>(act_bits);
-    const auto r = T::template load<K>(rays, c);
+    const auto r = T::template load<K>(prepared, c);
     const B upper = xsimd::select(act, B::load_aligned(rays.tmax + c), B(-std::numeric_limits<float>::infinity()));
     M hit(false);
     // Any hit ends a lane; the chunk ends when every active lane has one.

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "simd/kernel_common.h"
+#include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/triangle_blocks.h"
 
@@ -31,14 +32,19 @@ struct PlaneTest {
     B t, u, v;
   };
 
-  static Rays broadcast(const PreparedRay& r);
+  [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
+  /// Nothing to precompute per lane: copies the rays.
   template <int K>
-  static Rays load(const RayPacket<K>& p, int offset);
-  static Tris load_block(const Block& b, const Rays& r);
-  static Tris broadcast_tri(const Block& b, int j, const Rays& r);
-  static Cand test(const Rays& r, const Tris& tri, B upper);
+  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
+  template <int K>
+  [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
+  [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
+  [[gnu::always_inline]] inline static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
+  /// per call, so call overhead and batches passed through memory would dominate).
+  [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
   /// The lanes of `c` still hit when the upper end shrinks to `upper`.
-  static M accept(const Cand& c, B upper);
+  [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
 };
 
 template <class Arch>
@@ -48,8 +54,14 @@ auto PlaneTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
 
 template <class Arch>
 template <int K>
-auto PlaneTest<Arch>::load(const RayPacket<K>& p, int offset) -> Rays {
-  return load_ray_lanes<Arch, K>(p, offset);
+void PlaneTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+  out.rays = rays;
+}
+
+template <class Arch>
+template <int K>
+auto PlaneTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
+  return load_ray_lanes<Arch, K>(p.rays, offset);
 }
 
 template <class Arch>
@@ -67,11 +79,10 @@ auto PlaneTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris 
 
 template <class Arch>
 auto PlaneTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
-  const B zero(0.0f), one(1.0f), max(std::numeric_limits<float>::max());
+  const B zero(0.0f), one(1.0f);
   // den = n . dir; fails for 0 (parallel ray, degenerate triangle), Inf and NaN (padding).
   const B den = tri.nx * r.dx + tri.ny * r.dy + tri.nz * r.dz;
-  const B ad = xsimd::abs(den);
-  M valid = (ad > zero) & (ad <= max);
+  M valid = finite_nonzero<Arch>(den);
   if (xsimd::none(valid)) return {valid, den, den, den};
   // Ray/plane distance t = (d - n . org) / den, in [tmin, upper).
   const B t = (tri.d - (tri.nx * r.ox + tri.ny * r.oy + tri.nz * r.oz)) / den;

@@ -22,6 +22,8 @@ class KernelsFor final : public TriangleKernels {
   using Packets = PacketKernels<Arch, Test, kPacketSize>;
 
   KernelsFor() : TriangleKernels(Test, kIsaOf<Arch>) {}
+  using TriangleKernels::intersect;
+  using TriangleKernels::occluded;
 
   int width() const override { return W; }
   std::size_t bytes() const override { return blocks_.size() * sizeof(Block); }
@@ -54,10 +56,11 @@ class KernelsFor final : public TriangleKernels {
   bool occluded(const PreparedRay& ray, BlockRange r) const override {
     return Single::occluded(ray, blocks_.data() + r.first, r.count);
   }
-  void intersect(const Packet& rays, BlockRange r, PacketHits& hits) const override {
+  void prepare(const Packet& rays, PreparedPacket16& out) const override { Packets::prepare(rays, out); }
+  void intersect(const PreparedPacket16& rays, BlockRange r, PacketHits& hits) const override {
     Packets::intersect(rays, blocks_.data() + r.first, r.count, hits);
   }
-  std::uint32_t occluded(const Packet& rays, BlockRange r, std::uint32_t active) const override {
+  std::uint32_t occluded(const PreparedPacket16& rays, BlockRange r, std::uint32_t active) const override {
     return Packets::occluded(rays, blocks_.data() + r.first, r.count, active);
   }
 

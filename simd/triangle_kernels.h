@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/ray_packet.h"
 #include "volley/options.h"
@@ -25,6 +26,7 @@ inline constexpr int kPacketSize = 16;
 /// The packet types of the packet forms.
 using Packet = RayPacket<kPacketSize>;
 using PacketHits = HitPacket<kPacketSize>;
+using PreparedPacket16 = PreparedPacket<kPacketSize>;
 
 /// One triangle test on one ISA: owns the triangle blocks (64-byte aligned, W triangles
 /// each) and intersects rays with runs of them.
@@ -75,13 +77,28 @@ class TriangleKernels {
   void intersect(const Ray& ray, BlockRange r, Hit& hit) const { intersect(prepare(ray), r, hit); }
   bool occluded(const Ray& ray, BlockRange r) const { return occluded(prepare(ray), r); }
 
-  /// Closest hit of each active lane of `rays` (bit i of rays.active) over the blocks of
-  /// `r`, each triangle tested against all 16 lanes at once. Writes only lanes that hit
-  /// something nearer than hits.t[i] (and ray tmax). Inactive lanes are never written.
-  virtual void intersect(const Packet& rays, BlockRange r, PacketHits& hits) const = 0;
-  /// The lanes of `active` (ANDed with rays.active) occluded by a triangle of `r`
-  /// (tmin <= t < tmax); returns them as a bit mask. Stops when all are occluded.
-  virtual std::uint32_t occluded(const Packet& rays, BlockRange r, std::uint32_t active) const = 0;
+  /// The per-lane precomputation of this test for a packet (the Woop shear of every lane
+  /// for watertight; a copy for moller and plane), to reuse for every leaf it visits.
+  virtual void prepare(const Packet& rays, PreparedPacket16& out) const = 0;
+  /// Closest hit of each active lane (bit i of rays.rays.active) over the blocks of `r`,
+  /// each triangle tested against all 16 lanes at once. Writes only lanes that hit
+  /// something nearer than hits.t[i] (and the lane's tmax); inactive lanes are never
+  /// written. `rays` must come from this object's prepare().
+  virtual void intersect(const PreparedPacket16& rays, BlockRange r, PacketHits& hits) const = 0;
+  /// The lanes of `active` (ANDed with rays.rays.active) occluded by a triangle of `r`
+  /// (tmin <= t < tmax), as a bit mask. Stops when all of them are occluded.
+  virtual std::uint32_t occluded(const PreparedPacket16& rays, BlockRange r, std::uint32_t active) const = 0;
+  /// As above, preparing the packet on the fly (costs one prepare() per call).
+  void intersect(const Packet& rays, BlockRange r, PacketHits& hits) const {
+    PreparedPacket16 p;
+    prepare(rays, p);
+    intersect(p, r, hits);
+  }
+  std::uint32_t occluded(const Packet& rays, BlockRange r, std::uint32_t active) const {
+    PreparedPacket16 p;
+    prepare(rays, p);
+    return occluded(p, r, active);
+  }
 
  protected:
   TriangleKernels(TriangleTest test, Isa isa) : test_(test), isa_(isa) {}

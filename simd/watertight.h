@@ -15,6 +15,7 @@
 #include <limits>
 
 #include "simd/kernel_common.h"
+#include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/triangle_blocks.h"
 #include "simd/watertight_stats.h"
@@ -35,7 +36,8 @@ struct WatertightTest {
   /// lanes (`uniform`, always so for a single ray; then kx, ky, kz apply) or per lane
   /// (masks x0: kx == 0, x1: kx == 1, likewise y0, y1 for ky and z0, z1 for kz).
   struct Rays {
-    B o[3];             // origin x y z
+    B o[3];             // origin x y z (per-lane permutation)
+    B okx, oky, okz;    // origin along kx, ky, kz (uniform permutation)
     B tmin;
     B sx, sy, sz;       // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
     M ok;               // |sz| > 0: an infinite dir[kz] (sz = 0) or NaN never hits
@@ -56,22 +58,31 @@ struct WatertightTest {
     B t, u, v, ts_s, ad;
   };
 
-  static Rays broadcast(const PreparedRay& r);
+  [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
+  /// The oracle's make_woop_ray for every lane, and whether the active lanes share axes.
   template <int K>
-  static Rays load(const RayPacket<K>& p, int offset);
-  static Tris load_block(const Block& b, const Rays& r);
-  static Tris broadcast_tri(const Block& b, int j, const Rays& r);
-  static Cand test(const Rays& r, const Tris& tri, B upper);
+  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
+  template <int K>
+  [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
+  [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
+  [[gnu::always_inline]] inline static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
+  /// per call, so call overhead and batches passed through memory would dominate).
+  [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
   /// The lanes of `c` still hit when the upper end shrinks to `upper`.
-  static M accept(const Cand& c, B upper);
+  [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
   /// Recomputes the edge functions of the lanes in `lanes` in double (exact products).
-  static void fallback(std::uint32_t lanes, B ax, B ay, B bx, B by, B cx, B cy, B& eu, B& ev, B& ew);
+  /// Out of line and cold: the test stays small enough to inline.
+  [[gnu::noinline, gnu::cold]] static void fallback(std::uint32_t lanes, B ax, B ay, B bx, B by, B cx, B cy, B& eu, B& ev, B& ew);
 };
 
 template <class Arch>
 auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
   Rays out;
   for (int i = 0; i < 3; ++i) out.o[i] = B(r.ray.org[i]);
+  out.okx = B(r.ray.org[r.k[0]]);
+  out.oky = B(r.ray.org[r.k[1]]);
+  out.okz = B(r.ray.org[r.k[2]]);
   out.tmin = B(r.ray.tmin);
   out.sx = B(r.s[0]);
   out.sy = B(r.s[1]);
@@ -86,51 +97,85 @@ auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
 
 template <class Arch>
 template <int K>
-auto WatertightTest<Arch>::load(const RayPacket<K>& p, int offset) -> Rays {
-  Rays out;
-  out.o[0] = B::load_aligned(p.ox + offset);
-  out.o[1] = B::load_aligned(p.oy + offset);
-  out.o[2] = B::load_aligned(p.oz + offset);
-  out.tmin = B::load_aligned(p.tmin + offset);
-  const B dx = B::load_aligned(p.dx + offset), dy = B::load_aligned(p.dy + offset),
-          dz = B::load_aligned(p.dz + offset);
-  // make_woop_ray per lane: kz = axis of the largest |dir| (ties: lowest axis), kx and ky
-  // the next two cyclically, swapped when dir[kz] < 0 (keeps the winding).
-  const B ax = xsimd::abs(dx), ay = xsimd::abs(dy), az = xsimd::abs(dz);
-  const M x_ge_y = ax >= ay;
-  const M z0 = x_ge_y & (ax >= az);
-  const M z1 = ~x_ge_y & (ay >= az);
-  const B dkz = xsimd::select(z0, dx, xsimd::select(z1, dy, dz));
-  const M neg = dkz < B(0.0f);
-  const M z2 = ~(z0 | z1);
-  // Unswapped: kx = kz + 1, ky = kz + 2 (mod 3); swapped: exchanged.
-  out.x0 = (neg & z1) | (~neg & z2);
-  out.x1 = (neg & z2) | (~neg & z0);
-  out.y0 = (neg & z2) | (~neg & z1);
-  out.y1 = (neg & z0) | (~neg & z2);
-  out.z0 = z0;
-  out.z1 = z1;
-  const B dkx = xsimd::select(out.x0, dx, xsimd::select(out.x1, dy, dz));
-  const B dky = xsimd::select(out.y0, dx, xsimd::select(out.y1, dy, dz));
-  out.sx = dkx / dkz;
-  out.sy = dky / dkz;
-  out.sz = B(1.0f) / dkz;
-  out.ok = xsimd::abs(out.sz) > B(0.0f);
+void WatertightTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+  using I = IntB<Arch>;
+  out.rays = rays;
+  std::uint32_t axes_seen = 0;  // bit (kz * 2 + swapped) of every active lane
+  for (int c = 0; c < K; c += W) {
+    const B dx = B::load_aligned(rays.dx + c), dy = B::load_aligned(rays.dy + c), dz = B::load_aligned(rays.dz + c);
+    // make_woop_ray per lane: kz = axis of the largest |dir| (ties: lowest axis), kx and
+    // ky the next two cyclically, swapped when dir[kz] < 0 (keeps the winding).
+    const B ax = xsimd::abs(dx), ay = xsimd::abs(dy), az = xsimd::abs(dz);
+    const M x_ge_y = ax >= ay;
+    const M z0 = x_ge_y & (ax >= az);
+    const M z1 = ~x_ge_y & (ay >= az);
+    const M z2 = ~(z0 | z1);
+    const B dkz = xsimd::select(z0, dx, xsimd::select(z1, dy, dz));
+    const M neg = dkz < B(0.0f);
+    // Unswapped: kx = kz + 1, ky = kz + 2 (mod 3); swapped: exchanged.
+    const M x0 = (neg & z1) | (~neg & z2), x1 = (neg & z2) | (~neg & z0);
+    const M y0 = (neg & z2) | (~neg & z1), y1 = (neg & z0) | (~neg & z2);
+    const B dkx = xsimd::select(x0, dx, xsimd::select(x1, dy, dz));
+    const B dky = xsimd::select(y0, dx, xsimd::select(y1, dy, dz));
+    (dkx / dkz).store_aligned(out.s[0] + c);
+    (dky / dkz).store_aligned(out.s[1] + c);
+    (B(1.0f) / dkz).store_aligned(out.s[2] + c);
+    const auto axis = [](M is0, M is1) {
+      return xsimd::select(xsimd::bool_cast(is0), I(0), xsimd::select(xsimd::bool_cast(is1), I(1), I(2)));
+    };
+    axis(x0, x1).store_aligned(out.k[0] + c);
+    axis(y0, y1).store_aligned(out.k[1] + c);
+    axis(z0, z1).store_aligned(out.k[2] + c);
+    const std::uint32_t act = (rays.active >> c) & ((2u << (W - 1)) - 1u);
+    const std::uint32_t b0 = bits_from_mask<Arch>(z0) & act, b1 = bits_from_mask<Arch>(z1) & act,
+                        b2 = bits_from_mask<Arch>(z2) & act, bn = bits_from_mask<Arch>(neg) & act;
+    axes_seen |= (b0 & ~bn ? 1u : 0u) | (b0 & bn ? 2u : 0u) | (b1 & ~bn ? 4u : 0u) | (b1 & bn ? 8u : 0u) |
+                 (b2 & ~bn ? 16u : 0u) | (b2 & bn ? 32u : 0u);
+  }
   // One permutation for all active lanes (the common case of a coherent packet): the
   // triangle's coordinates are then picked by index instead of per-lane selects.
-  const std::uint32_t act = (p.active >> offset) & ((2u << (W - 1)) - 1u);
-  const std::uint32_t b0 = bits_from_mask<Arch>(z0) & act, b1 = bits_from_mask<Arch>(z1) & act,
-                      bn = bits_from_mask<Arch>(neg) & act;
-  out.uniform = (b0 == 0 || b0 == act) && (b1 == 0 || b1 == act) && (bn == 0 || bn == act);
+  out.uniform = std::popcount(axes_seen) <= 1;
   if (out.uniform) {
-    out.kz = b0 ? 0 : b1 ? 1 : 2;
-    out.kx = out.kz == 2 ? 0 : out.kz + 1;
-    out.ky = out.kx == 2 ? 0 : out.kx + 1;
-    if (bn != 0) {
-      const int k = out.kx;
-      out.kx = out.ky;
-      out.ky = k;
+    const int kz = axes_seen & 3u ? 0 : axes_seen & 12u ? 1 : 2;
+    const bool swapped = (axes_seen & 42u) != 0;
+    out.uk[2] = kz;
+    out.uk[0] = kz == 2 ? 0 : kz + 1;
+    out.uk[1] = out.uk[0] == 2 ? 0 : out.uk[0] + 1;
+    if (swapped) {
+      const int k = out.uk[0];
+      out.uk[0] = out.uk[1];
+      out.uk[1] = k;
     }
+  }
+}
+
+template <class Arch>
+template <int K>
+auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
+  using I = IntB<Arch>;
+  Rays out;
+  out.o[0] = B::load_aligned(p.rays.ox + offset);
+  out.o[1] = B::load_aligned(p.rays.oy + offset);
+  out.o[2] = B::load_aligned(p.rays.oz + offset);
+  out.tmin = B::load_aligned(p.rays.tmin + offset);
+  out.sx = B::load_aligned(p.s[0] + offset);
+  out.sy = B::load_aligned(p.s[1] + offset);
+  out.sz = B::load_aligned(p.s[2] + offset);
+  out.ok = xsimd::abs(out.sz) > B(0.0f);
+  out.uniform = p.uniform != 0;
+  if (out.uniform) {
+    out.kx = p.uk[0];
+    out.ky = p.uk[1];
+    out.kz = p.uk[2];
+    out.okx = out.o[out.kx];
+    out.oky = out.o[out.ky];
+    out.okz = out.o[out.kz];
+  } else {
+    const I kx = I::load_aligned(p.k[0] + offset), ky = I::load_aligned(p.k[1] + offset),
+            kz = I::load_aligned(p.k[2] + offset);
+    out.x0 = xsimd::bool_cast(kx == I(0)), out.x1 = xsimd::bool_cast(kx == I(1));
+    out.y0 = xsimd::bool_cast(ky == I(0)), out.y1 = xsimd::bool_cast(ky == I(1));
+    out.z0 = xsimd::bool_cast(kz == I(0)), out.z1 = xsimd::bool_cast(kz == I(1));
   }
   return out;
 }
@@ -139,20 +184,20 @@ template <class Arch>
 auto WatertightTest<Arch>::load_block(const Block& b, const Rays& r) -> Tris {
   // Single ray: always uniform, so the permutation is an index into the block.
   const int kx = r.kx, ky = r.ky, kz = r.kz;
-  return {B::load_aligned(b.p[0][kx]) - r.o[kx], B::load_aligned(b.p[0][ky]) - r.o[ky],
-          B::load_aligned(b.p[0][kz]) - r.o[kz], B::load_aligned(b.p[1][kx]) - r.o[kx],
-          B::load_aligned(b.p[1][ky]) - r.o[ky], B::load_aligned(b.p[1][kz]) - r.o[kz],
-          B::load_aligned(b.p[2][kx]) - r.o[kx], B::load_aligned(b.p[2][ky]) - r.o[ky],
-          B::load_aligned(b.p[2][kz]) - r.o[kz]};
+  return {B::load_aligned(b.p[0][kx]) - r.okx, B::load_aligned(b.p[0][ky]) - r.oky,
+          B::load_aligned(b.p[0][kz]) - r.okz, B::load_aligned(b.p[1][kx]) - r.okx,
+          B::load_aligned(b.p[1][ky]) - r.oky, B::load_aligned(b.p[1][kz]) - r.okz,
+          B::load_aligned(b.p[2][kx]) - r.okx, B::load_aligned(b.p[2][ky]) - r.oky,
+          B::load_aligned(b.p[2][kz]) - r.okz};
 }
 
 template <class Arch>
 auto WatertightTest<Arch>::broadcast_tri(const Block& b, int j, const Rays& r) -> Tris {
   if (r.uniform) {
     const int kx = r.kx, ky = r.ky, kz = r.kz;
-    return {B(b.p[0][kx][j]) - r.o[kx], B(b.p[0][ky][j]) - r.o[ky], B(b.p[0][kz][j]) - r.o[kz],
-            B(b.p[1][kx][j]) - r.o[kx], B(b.p[1][ky][j]) - r.o[ky], B(b.p[1][kz][j]) - r.o[kz],
-            B(b.p[2][kx][j]) - r.o[kx], B(b.p[2][ky][j]) - r.o[ky], B(b.p[2][kz][j]) - r.o[kz]};
+    return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,
+            B(b.p[1][kx][j]) - r.okx, B(b.p[1][ky][j]) - r.oky, B(b.p[1][kz][j]) - r.okz,
+            B(b.p[2][kx][j]) - r.okx, B(b.p[2][ky][j]) - r.oky, B(b.p[2][kz][j]) - r.okz};
   }
   // Per-lane permutation: relative coordinates along x y z, then picked per lane.
   Tris out;
@@ -168,7 +213,7 @@ auto WatertightTest<Arch>::broadcast_tri(const Block& b, int j, const Rays& r) -
 
 template <class Arch>
 auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
-  const B zero(0.0f), max(std::numeric_limits<float>::max());
+  const B zero(0.0f);
   // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
   const B ax = tri.akx - r.sx * tri.akz;
   const B ay = tri.aky - r.sy * tri.akz;
@@ -188,8 +233,8 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   M valid = r.ok & ~(((eu < zero) | (ev < zero) | (ew < zero)) & ((eu > zero) | (ev > zero) | (ew > zero)));
   // det = 0: the ray lies in the plane; NaN and Inf fail.
   const B det = eu + ev + ew;
+  valid = valid & finite_nonzero<Arch>(det);
   const B ad = xsimd::abs(det);
-  valid = valid & (ad > zero) & (ad <= max);
   if (xsimd::none(valid)) return {valid, det, det, det, det, ad};
   // Scaled distance t det against [tmin, upper) |det| with det's sign folded in.
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;

@@ -246,10 +246,12 @@ Agreement compare_all_forms(const Soup& soup, const std::vector<Ray>& rays, cons
       volley::simd::HitPacket<K> got, got_tri;
       volley::simd::reset(got);
       volley::simd::reset(got_tri);
-      volley::simd::PacketKernels<Arch, Test, K>::intersect(packet, blocks.data(), nblocks, got);
+      volley::simd::PreparedPacket<K> prepared;
+      volley::simd::PacketKernels<Arch, Test, K>::prepare(packet, prepared);
+      volley::simd::PacketKernels<Arch, Test, K>::intersect(prepared, blocks.data(), nblocks, got);
       for (std::uint32_t b = 0; b < nblocks; ++b)
-        for (int j = 0; j < W; ++j) volley::simd::PacketKernels<Arch, Test, K>::intersect_triangle(packet, blocks[b], j, got_tri);
-      const std::uint32_t occ = volley::simd::PacketKernels<Arch, Test, K>::occluded(packet, blocks.data(), nblocks, ~0u);
+        for (int j = 0; j < W; ++j) volley::simd::PacketKernels<Arch, Test, K>::intersect_triangle(prepared, blocks[b], j, got_tri);
+      const std::uint32_t occ = volley::simd::PacketKernels<Arch, Test, K>::occluded(prepared, blocks.data(), nblocks, ~0u);
       for (int i = 0; i < K; ++i) {
         if (i >= count) {
           a.check(volley::simd::hit_of(got, i), Hit{}, volley::simd::ray_of(packet, i), label + " padding lane");

@@ -96,11 +96,13 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
         if (g.integer(0, 3) == 0) set_lane(start, i, Hit{g.uniform(0.0f, 5.0f), 0.25f, 0.5f, 77});
 
       HitPacket<K> got = start, got_tri = start;
-      PacketKernels<Arch, Test, K>::intersect(packet, blocks.data(), nblocks, got);
+      volley::simd::PreparedPacket<K> prepared;
+      PacketKernels<Arch, Test, K>::prepare(packet, prepared);
+      PacketKernels<Arch, Test, K>::intersect(prepared, blocks.data(), nblocks, got);
       for (std::uint32_t b = 0; b < nblocks; ++b)
-        for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(packet, blocks[b], j, got_tri);
+        for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(prepared, blocks[b], j, got_tri);
       const std::uint32_t ask = packet.active & static_cast<std::uint32_t>(g.integer(0, (1 << K) - 1) | 1);
-      const std::uint32_t occ = PacketKernels<Arch, Test, K>::occluded(packet, blocks.data(), nblocks, ask);
+      const std::uint32_t occ = PacketKernels<Arch, Test, K>::occluded(prepared, blocks.data(), nblocks, ask);
       for (int i = 0; i < K; ++i) {
         const Ray ray = volley::simd::ray_of(packet, i);
         const bool active = packet.active >> i & 1;

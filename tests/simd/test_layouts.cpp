@@ -64,7 +64,7 @@ TEST_CASE_TEMPLATE("blocks hold the oracle's values, NaN padding and invalid ids
     const V3 e1 = p1 - p0, e2 = p2 - p0, n = glm::cross(e1, e2);
     CHECK(m[b].prim[i] == soup.ids[t]);
     CHECK(m[b].v0[0][i] == p0.x);
-    CHECK(m[b].e2[2][i] == e2.z);
+    CHECK(m[b].ne2[2][i] == -e2.z);
     CHECK(m[b].n[1][i] == n.y);
     const auto pt = volley::core::PlaneTriangle<float>::from(p0, p1, p2);
     CHECK(p[b].d[i] == pt.d);

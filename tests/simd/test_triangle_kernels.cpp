@@ -46,15 +46,23 @@ void facade_agrees(TriangleTest test) {
                                            : g.aimed(soup, 0);
       volley::simd::Packet packet;
       volley::simd::load(packet, rays, volley::simd::kPacketSize - (p % 2));
-      volley::simd::PacketHits hits;
+      volley::simd::PacketHits hits, hits_prepared;
       volley::simd::reset(hits);
+      volley::simd::reset(hits_prepared);
       kernels->intersect(packet, ranges[gi], hits);
       const std::uint32_t occ = kernels->occluded(packet, ranges[gi], packet.active);
+      // The prepared form, as a traversal uses it: prepare once, query (twice here).
+      volley::simd::PreparedPacket16 prepared;
+      kernels->prepare(packet, prepared);
+      kernels->intersect(prepared, ranges[gi], hits_prepared);
+      kernels->intersect(prepared, ranges[gi], hits_prepared);
+      CHECK(kernels->occluded(prepared, ranges[gi], packet.active) == occ);
       for (int i = 0; i < volley::simd::kPacketSize; ++i) {
         const Ray r = volley::simd::ray_of(packet, i);
         const bool active = packet.active >> i & 1;
         const Hit want = active ? oracle_closest(test, r, Hit{}, soup, first, last) : Hit{};
         a.check(volley::simd::hit_of(hits, i), want, r, where + " packet");
+        a.check(volley::simd::hit_of(hits_prepared, i), want, r, where + " prepared packet");
         a.check_bool(occ >> i & 1, active && oracle_occluded(test, r, soup, first, last), r, where + " packet occluded");
         if (!active) continue;
         Hit single;

@@ -64,10 +64,12 @@ Leaks count_leaks(const Soup& soup, const std::vector<Ray>& rays) {
     HitPacket<K> hits, hits_tri;
     volley::simd::reset(hits);
     volley::simd::reset(hits_tri);
-    PacketKernels<Arch, Test, K>::intersect(packet, blocks.data(), nblocks, hits);
+    volley::simd::PreparedPacket<K> prepared;
+    PacketKernels<Arch, Test, K>::prepare(packet, prepared);
+    PacketKernels<Arch, Test, K>::intersect(prepared, blocks.data(), nblocks, hits);
     for (std::uint32_t b = 0; b < nblocks; ++b)
-      for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(packet, blocks[b], j, hits_tri);
-    const std::uint32_t occ = PacketKernels<Arch, Test, K>::occluded(packet, blocks.data(), nblocks, packet.active);
+      for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(prepared, blocks[b], j, hits_tri);
+    const std::uint32_t occ = PacketKernels<Arch, Test, K>::occluded(prepared, blocks.data(), nblocks, packet.active);
     for (int i = 0; i < count; ++i) {
       leaks.packet += hits.prim[i] == kInvalidPrim;
       leaks.packet_triangle += hits_tri.prim[i] == kInvalidPrim;

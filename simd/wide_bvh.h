@@ -1,0 +1,73 @@
+// The wide BVH: N-wide nodes (N = 8) with their children's boxes in SoA, collapsed from
+// the scalar oracle's binary binned-SAH BVH (core/bvh.h), leaves pointing at runs of
+// triangle blocks (triangle_blocks.h). Plain data, no xsimd: the traversal kernels
+// (wide_traverse.h) read it, baseline code builds it (wide_build.cpp).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "core/bvh.h"
+#include "simd/aligned.h"
+
+namespace volley::simd {
+
+/// BVH width: children per node. 8 children are one AVX register per box plane; SSE tests
+/// them as two halves (measured against N = 4 in perf/: see wide_accel.h).
+inline constexpr int kWideN = 8;
+
+/// One N-wide node: the boxes of its children in SoA (a plane per array, the slab test of
+/// all N children is one vector operation per plane), and a reference per child.
+/// bounds[2a] = lower bounds on axis a, bounds[2a + 1] = upper bounds, so the near and far
+/// planes of a ray are picked by its octant with an offset of N floats.
+/// Unused children are inert: lo = +inf, hi = -inf (every slab test fails for every ray,
+/// NaN rays and zero direction components included), ref = kEmptyRef.
+template <int N>
+struct alignas(64) WideNode {
+  float bounds[6][N];       // 24N bytes: lo_x hi_x lo_y hi_y lo_z hi_z, one lane per child
+  std::uint32_t child[N];   //  4N bytes: child references (see WideRef)
+};                          // N = 8: 224 bytes, padded to 256 (4 cache lines); N = 4: 112 -> 128
+static_assert(sizeof(WideNode<8>) == 256, "WideNode<8>: 192 B boxes + 32 B refs + 32 B padding");
+static_assert(sizeof(WideNode<4>) == 128, "WideNode<4>: 96 B boxes + 16 B refs + 16 B padding");
+
+/// Child references, 32 bits:
+///   interior: bit 31 clear, bits 0..30 = node index;
+///   leaf:     bit 31 set, bits 27..30 = block count (0..15), bits 0..26 = first block.
+/// A leaf of 0 blocks is the empty reference (kEmptyRef).
+namespace wide_ref {
+inline constexpr std::uint32_t kLeafBit = 0x80000000u;
+inline constexpr int kCountShift = 27;
+inline constexpr std::uint32_t kCountMask = 0xfu;
+inline constexpr std::uint32_t kFirstMask = (1u << kCountShift) - 1u;
+/// Most blocks one leaf may hold.
+inline constexpr std::uint32_t kMaxLeafBlocks = kCountMask;
+/// Most blocks a wide BVH may hold (first block index fits 27 bits).
+inline constexpr std::size_t kMaxBlocks = std::size_t{1} << kCountShift;
+/// The reference of an unused child (a leaf of zero blocks).
+inline constexpr std::uint32_t kEmptyRef = kLeafBit;
+}  // namespace wide_ref
+
+/// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,
+/// the root reference and build statistics. Immutable after build; thread-safe to read.
+template <int N, class Block>
+struct WideBvh {
+  AlignedVector<WideNode<N>> nodes;  // 256 bytes per node (N = 8)
+  AlignedVector<Block> blocks;       // sizeof(Block) per W triangles, leaves padded to whole blocks
+  /// Root reference: an interior node (nodes[0]), a leaf (a scene of one leaf), or
+  /// kEmptyRef (no triangle can be hit).
+  std::uint32_t root = wide_ref::kEmptyRef;
+};
+
+/// Statistics of a wide BVH (for AccelInfo / `volley info`).
+struct WideStats {
+  std::size_t nodes = 0;         ///< wide interior nodes
+  std::size_t leaves = 0;        ///< leaves (runs of blocks)
+  std::size_t depth = 0;         ///< deepest leaf in wide levels (root = 0)
+  std::size_t blocks = 0;        ///< triangle blocks
+  std::size_t triangles = 0;     ///< triangles stored in leaves (degenerate ones left out)
+  double mean_children = 0.0;    ///< used children per node (fill of the N lanes)
+  double sah_cost = 0.0;         ///< sum A(node) + sum A(leaf) * triangles, over A(root)
+  double block_sah_cost = 0.0;   ///< sum A(node) + sum A(leaf) * blocks, over A(root)
+  std::size_t bytes = 0;         ///< nodes + blocks
+};
+
+}  // namespace volley::simd

@@ -1,0 +1,873 @@
+// Wide-BVH traversal kernels: one ray (closest hit, any hit) and packets of 16 rays
+// (closest hit, any hit) against WideNode<8> nodes (wide_bvh.h), leaves handed to the
+// triangle block kernels (block_kernels.h). Bodies templated on Arch, instantiated only in
+// the per-ISA files wide_isa_sse42.cpp, wide_isa_avx2.cpp, wide_isa_avx512.cpp; the
+// extern template declarations at the end keep every other file from instantiating them.
+//
+// Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
+// operation for operation: slab distances (plane - org) * (1 / dir) with near and far
+// plane picked by the octant of the ray (not by min/max), entry = max(near_x, near_y,
+// near_z, tmin), exit = min(far_x, far_y, far_z, tmax) * kSlabExitPad, hit when
+// entry <= exit. NaN-safe operand order: every max/min is maxps/minps(distance, running
+// bound), which returns its second operand when either is NaN, so a NaN slab distance
+// (origin on a slab plane with a zero direction component) leaves the running bound
+// unchanged and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`.
+// The running bounds themselves are never NaN (NaN tmin / tmax rays are rejected first).
+// Inert children (lo = +inf, hi = -inf) fail for every ray.
+#pragma once
+#include <immintrin.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <xsimd/xsimd.hpp>
+
+#include "core/bvh.h"
+#include "core/bvh_traverse.h"
+#include "simd/arch.h"
+#include "simd/block_kernels.h"
+#include "simd/kernel_common.h"
+#include "simd/prepared_packet.h"
+#include "simd/prepared_ray.h"
+#include "simd/ray_packet.h"
+#include "simd/triangle_blocks.h"
+#include "simd/wide_bvh.h"
+#include "volley/options.h"
+#include "volley/ray.h"
+
+namespace volley::simd {
+
+/// Rays per packet of the packet traversal (RayPacket<16>); the API widens K = 4 and 8.
+inline constexpr int kWidePacket = 16;
+
+/// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
+/// lanes (or fewer) are still active in it (Embree's "switch threshold"; measured in
+/// perf/wide_bvh.md).
+inline constexpr int kPacketSwitchLanes = 3;
+
+/// Coherent packets (one octant, no zero direction component) take the frustum walk.
+inline constexpr bool kFrustum = true;
+
+namespace detail {
+/// The lane setup of a packet, computed once by WideKernels::screen.
+template <int K>
+struct alignas(64) PacketSetup {
+  float inv[3][K];         // 12K bytes: 1 / dir per lane, as the oracle (±inf for ±0)
+  std::uint32_t valid;     //  4 bytes: the active lanes the oracle does not reject
+  std::uint32_t uniform;   //  4 bytes: 0 mixed octants; 1 one octant; 3 one octant and no
+                           //           zero direction component (the frustum walk applies)
+};
+}  // namespace detail
+
+/// What the kernels read of a built WideBvh: raw pointers (the owner keeps the storage).
+template <class Block>
+struct WideView {
+  const WideNode<kWideN>* nodes;  ///< 64-byte aligned
+  const Block* blocks;            ///< 64-byte aligned
+  std::uint32_t root;             ///< root reference (wide_ref)
+};
+
+/// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
+/// W = kLanes<Arch> triangles. Robust = false drops the exit padding (kSlabExitPad) from
+/// the box test and the stack pruning: kept only for the mutation test that shows the
+/// padding matters (tests/accel). All functions are thread-safe (pure functions of their
+/// arguments).
+///
+/// Semantics, all forms: the answers of the scalar oracle's closest-hit / any-hit
+/// traversal with the same triangle test (same hit / miss; same prim, or the same t when
+/// two triangles tie). Rays with a non-finite origin or direction component, or a NaN
+/// tmin or tmax, hit nothing (as core::traverse_leaves).
+template <class Arch, TriangleTest Test, bool Robust = true>
+struct WideKernels {
+  static constexpr int N = kWideN;
+  static constexpr int L = kLanes<Arch>;
+  static constexpr int K = kWidePacket;
+  static constexpr int W = kLanes<Arch>;
+  using Block = BlockFor<Test, W>;
+  using View = WideView<Block>;
+
+  /// Closest hit of one ray: updates `hit` with every triangle hit at
+  /// ray.tmin <= t < min(hit.t, ray.tmax) that is nearer (as RayBlockKernels::intersect).
+  /// `ray` must be prepared for Test (prepare_ray with the watertight shear for watertight).
+  static void intersect(const View& bvh, const PreparedRay& ray, Hit& hit);
+  /// True when some triangle is hit with ray.tmin <= t < ray.tmax.
+  static bool occluded(const View& bvh, const PreparedRay& ray);
+
+  /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
+  /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
+  /// that find a nearer hit are written. Inactive lanes are neither read nor written.
+  static void intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits);
+  /// The active lanes of `rays` that some triangle occludes (tmin <= t < tmax), as a mask.
+  static std::uint32_t occluded(const View& bvh, const RayPacket<K>& rays);
+
+  /// Single-ray traversal of the subtree `start` (the packet traversal's fallback).
+  template <bool AnyHit>
+  static bool trace_single(const View& bvh, const PreparedRay& ray, std::uint32_t start, Hit& hit);
+
+ private:
+  /// Bits of the first L lanes.
+  static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
+  /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
+  /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
+  /// fills `setup` (see PacketSetup).
+  static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
+  /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
+  /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
+  /// zero direction component (screen() says so).
+  template <bool AnyHit>
+  static std::uint32_t trace_frustum(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
+                                     HitPacket<K>& hits);
+  /// Triangles used in a block: the lanes before its padding (prim = kInvalidPrim).
+  static int used_lanes(const Block& block);
+  /// A leaf for the active lanes of a packet: the block kernels, except that a last block at
+  /// most half full is tested triangle by triangle (padding lanes cost a full test each in
+  /// the block form). Same answers and order as PacketKernels::intersect / occluded.
+  static void leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
+                             HitPacket<K>& hits);
+  static std::uint32_t leaf_occluded(PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
+                                     std::uint32_t lanes);
+  /// The packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
+  template <bool AnyHit, bool Uniform>
+  static std::uint32_t trace_packet(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
+                                    HitPacket<K>& hits);
+};
+
+namespace detail {
+
+/// Eight float lanes, one per child of a WideNode<8>: one AVX register (AVX2 and AVX-512,
+/// whose 16 lanes would be half empty), or two SSE registers. Raw intrinsics (always
+/// inlined, no symbols) inside members of a class templated on Arch.
+template <class Arch, bool Avx = (kLanes<Arch> >= 8)>
+struct Lanes8;
+
+template <class Arch>
+struct Lanes8<Arch, true> {
+  using V = __m256;
+  static V load(const float* p) { return _mm256_load_ps(p); }
+  static V set1(float x) { return _mm256_set1_ps(x); }
+  static V sub(V a, V b) { return _mm256_sub_ps(a, b); }
+  static V mul(V a, V b) { return _mm256_mul_ps(a, b); }
+  /// maxps(a, b): b when either is NaN.
+  static V max(V a, V b) { return _mm256_max_ps(a, b); }
+  /// minps(a, b): b when either is NaN.
+  static V min(V a, V b) { return _mm256_min_ps(a, b); }
+  /// Bit i set when a[i] <= b[i] (false for NaN).
+  static std::uint32_t le(V a, V b) {
+    return static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)));
+  }
+  static void store(float* p, V a) { _mm256_store_ps(p, a); }
+};
+
+template <class Arch>
+struct Lanes8<Arch, false> {
+  struct V {
+    __m128 a, b;
+  };
+  static V load(const float* p) { return {_mm_load_ps(p), _mm_load_ps(p + 4)}; }
+  static V set1(float x) { return {_mm_set1_ps(x), _mm_set1_ps(x)}; }
+  static V sub(V x, V y) { return {_mm_sub_ps(x.a, y.a), _mm_sub_ps(x.b, y.b)}; }
+  static V mul(V x, V y) { return {_mm_mul_ps(x.a, y.a), _mm_mul_ps(x.b, y.b)}; }
+  static V max(V x, V y) { return {_mm_max_ps(x.a, y.a), _mm_max_ps(x.b, y.b)}; }
+  static V min(V x, V y) { return {_mm_min_ps(x.a, y.a), _mm_min_ps(x.b, y.b)}; }
+  static std::uint32_t le(V x, V y) {
+    return static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmple_ps(x.a, y.a)) |
+                                      (_mm_movemask_ps(_mm_cmple_ps(x.b, y.b)) << 4));
+  }
+  static void store(float* p, V x) {
+    _mm_store_ps(p, x.a);
+    _mm_store_ps(p + 4, x.b);
+  }
+};
+
+/// A stack entry of single-ray traversal: a subtree and the ray's entry distance into it.
+template <class Arch>
+struct WideStackItem {
+  std::uint32_t ref;
+  float entry;
+};
+
+/// A stack entry of the frustum walk: a subtree, the packet's lower bound of the entry
+/// distances into it, and (leaves) the lanes whose own box test passed.
+template <class Arch>
+struct FrustumItem {
+  std::uint32_t ref;
+  float entry;
+  std::uint32_t lanes;
+};
+
+/// Smallest lane of v (no lane NaN).
+template <class Arch>
+float reduce_min(FloatB<Arch> v) {
+  __m128 m;
+  if constexpr (kLanes<Arch> == 16) {
+    return _mm512_reduce_min_ps(v);
+  } else if constexpr (kLanes<Arch> == 8) {
+    m = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  } else {
+    m = v;
+  }
+  m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+  m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
+  return _mm_cvtss_f32(m);
+}
+
+/// Largest lane of v (no lane NaN).
+template <class Arch>
+float reduce_max(FloatB<Arch> v) {
+  __m128 m;
+  if constexpr (kLanes<Arch> == 16) {
+    return _mm512_reduce_max_ps(v);
+  } else if constexpr (kLanes<Arch> == 8) {
+    m = _mm_max_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  } else {
+    m = v;
+  }
+  m = _mm_max_ps(m, _mm_movehl_ps(m, m));
+  m = _mm_max_ss(m, _mm_shuffle_ps(m, m, 1));
+  return _mm_cvtss_f32(m);
+}
+
+/// Entries a traversal stack needs: every wide level pushes at most N - 1 entries more
+/// than it pops, and a wide BVH is no deeper than its binary BVH (< kBvhMaxDepth).
+inline constexpr int kWideStack = (kWideN - 1) * core::kBvhMaxDepth + 1;
+
+}  // namespace detail
+
+// ---------------------------------------------------------------------------------------
+// Single ray
+
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit>
+bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const PreparedRay& pr, std::uint32_t start,
+                                                   Hit& hit) {
+  using V8 = detail::Lanes8<Arch>;
+  using Leaf = RayBlockKernels<Arch, Test>;
+  static_assert(N == 8, "the single-ray node test reads eight children");
+  const Ray& ray = pr.ray;
+  if (start == wide_ref::kEmptyRef) return false;
+  // Rejected as by the oracle: non-finite origin or direction, NaN interval ends.
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(ray.org[a]) || !std::isfinite(ray.dir[a])) return false;
+  if (std::isnan(ray.tmin) || std::isnan(ray.tmax)) return false;
+
+  // Slab-test setup, the oracle's make_box_ray: reciprocal direction (±inf for ±0) and
+  // the octant by its sign bit; near plane of axis a is bounds[2a + neg], far the other.
+  float inv[3];
+  int near_plane[3];
+  for (int a = 0; a < 3; ++a) {
+    inv[a] = 1.0f / ray.dir[a];
+    near_plane[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
+  }
+  const int fx = near_plane[0] ^ 1, fy = near_plane[1] ^ 1, fz = near_plane[2] ^ 1;
+  const int nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
+  const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
+  const auto ix = V8::set1(inv[0]), iy = V8::set1(inv[1]), iz = V8::set1(inv[2]);
+  const auto tmin = V8::set1(ray.tmin);
+  const auto pad = V8::set1(core::kSlabExitPad);
+  const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
+
+  // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
+  float tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+  detail::WideStackItem<Arch> stack[detail::kWideStack];
+  int size = 0;
+  bool found = false;
+  std::uint32_t ref = start;
+  for (;;) {
+    if (!(ref & wide_ref::kLeafBit)) {
+      // Interior: slab test of all eight children at once.
+      const WideNode<N>& node = bvh.nodes[ref];
+      const auto tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
+      const auto tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
+      const auto tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
+      const auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), ix);
+      const auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), iy);
+      const auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), iz);
+      const auto entry = V8::max(tnz, V8::max(tny, V8::max(tnx, tmin)));
+      auto exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, V8::set1(tmax))));
+      if constexpr (Robust) exit = V8::mul(exit, pad);
+      std::uint32_t bits = V8::le(entry, exit);
+      if (bits != 0) {
+        alignas(32) float dist[8];
+        V8::store(dist, entry);
+        const int i = std::countr_zero(bits);
+        bits &= bits - 1;
+        if (bits == 0) {
+          ref = node.child[i];
+          continue;
+        }
+        const int j = std::countr_zero(bits);
+        bits &= bits - 1;
+        if (bits == 0) {
+          // Two children: the nearer next, the other on the stack.
+          const bool swap = dist[j] < dist[i];
+          const int near = swap ? j : i, far = swap ? i : j;
+          stack[size++] = {node.child[far], dist[far]};
+          ref = node.child[near];
+          continue;
+        }
+        // Three or more: push all, sort the pushed run far to near (insertion sort of at
+        // most eight), and continue with the nearest (the top).
+        const int base = size;
+        stack[size++] = {node.child[i], dist[i]};
+        stack[size++] = {node.child[j], dist[j]};
+        for (; bits != 0; bits &= bits - 1) {
+          const int k = std::countr_zero(bits);
+          stack[size++] = {node.child[k], dist[k]};
+        }
+        if constexpr (!AnyHit) {
+          for (int a = base + 1; a < size; ++a) {
+            const detail::WideStackItem<Arch> item = stack[a];
+            int b = a;
+            for (; b > base && stack[b - 1].entry < item.entry; --b) stack[b] = stack[b - 1];
+            stack[b] = item;
+          }
+        }
+        ref = stack[--size].ref;
+        continue;
+      }
+    } else {
+      // Leaf: its blocks, closest hit (lowers tmax) or any hit (ends the walk).
+      const std::uint32_t count = (ref >> wide_ref::kCountShift) & wide_ref::kCountMask;
+      const Block* blocks = bvh.blocks + (ref & wide_ref::kFirstMask);
+      if constexpr (AnyHit) {
+        if (count != 0 && Leaf::occluded(pr, blocks, count)) return true;
+      } else if (count != 0) {
+        Leaf::intersect(pr, blocks, count, hit);
+        if (hit.t < tmax) {
+          tmax = hit.t;
+          found = true;
+        }
+      }
+    }
+    // Pop the next subtree that may still hold a hit nearer than tmax (padded as the
+    // exit distance: its entry was computed with rounding).
+    for (;;) {
+      if (size == 0) return found;
+      --size;
+      if (AnyHit || stack[size].entry <= tmax * pad1) break;
+    }
+    ref = stack[size].ref;
+  }
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const PreparedRay& ray, Hit& hit) {
+  trace_single<false>(bvh, ray, bvh.root, hit);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+bool WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const PreparedRay& ray) {
+  Hit unused;
+  return trace_single<true>(bvh, ray, bvh.root, unused);
+}
+
+// ---------------------------------------------------------------------------------------
+// Packets of 16 rays
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits) {
+  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return;
+  PreparedPacket<K> prep;
+  prep.rays = rays;
+  detail::PacketSetup<K> setup;
+  screen(prep.rays, setup);
+  if (setup.valid == 0) return;
+  PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
+  if (setup.uniform == 3 && kFrustum)
+    trace_frustum<false>(bvh, prep, setup, hits);
+  else if (setup.uniform != 0)
+    trace_packet<false, true>(bvh, prep, setup, hits);
+  else
+    trace_packet<false, false>(bvh, prep, setup, hits);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const RayPacket<K>& rays) {
+  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return 0;
+  PreparedPacket<K> prep;
+  prep.rays = rays;
+  detail::PacketSetup<K> setup;
+  screen(prep.rays, setup);
+  if (setup.valid == 0) return 0;
+  PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
+  HitPacket<K> unused;
+  if (setup.uniform == 3 && kFrustum) return trace_frustum<true>(bvh, prep, setup, unused);
+  return setup.uniform != 0 ? trace_packet<true, true>(bvh, prep, setup, unused)
+                            : trace_packet<true, false>(bvh, prep, setup, unused);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  constexpr int C = K / L;
+  const B zero(0.0f);
+  std::uint32_t valid = 0, negx = 0, negy = 0, negz = 0, zeros = 0;
+  for (int c = 0; c < C; ++c) {
+    const int o = c * L;
+    const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
+    const B dx = B::load_aligned(rays.dx + o), dy = B::load_aligned(rays.dy + o), dz = B::load_aligned(rays.dz + o);
+    const B tmin = B::load_aligned(rays.tmin + o), tmax = B::load_aligned(rays.tmax + o);
+    // Finite: x - x is 0, NaN for Inf and NaN. Not NaN: x == x.
+    const M ok = detail::mask_from_bits<Arch>((rays.active >> o) & kChunkBits) & ((ox - ox) == zero) &
+                 ((oy - oy) == zero) & ((oz - oz) == zero) & ((dx - dx) == zero) & ((dy - dy) == zero) &
+                 ((dz - dz) == zero) & (tmin == tmin) & (tmax == tmax);
+    // The oracle's reciprocal and octant (sign bit of 1 / dir: 1 / -0 = -inf < 0).
+    const B ix = B(1.0f) / dx, iy = B(1.0f) / dy, iz = B(1.0f) / dz;
+    ix.store_aligned(setup.inv[0] + o);
+    iy.store_aligned(setup.inv[1] + o);
+    iz.store_aligned(setup.inv[2] + o);
+    const std::uint32_t okb = detail::bits_from_mask<Arch>(ok);
+    valid |= okb << o;
+    negx |= (detail::bits_from_mask<Arch>(ix < zero) & okb) << o;
+    negy |= (detail::bits_from_mask<Arch>(iy < zero) & okb) << o;
+    negz |= (detail::bits_from_mask<Arch>(iz < zero) & okb) << o;
+    zeros |= (detail::bits_from_mask<Arch>((dx == zero) | (dy == zero) | (dz == zero)) & okb) << o;
+    // Rejected lanes become inert: org = dir = 0, tmin = 0, tmax = -inf.
+    if (okb != kChunkBits) {
+      xsimd::select(ok, ox, zero).store_aligned(rays.ox + o);
+      xsimd::select(ok, oy, zero).store_aligned(rays.oy + o);
+      xsimd::select(ok, oz, zero).store_aligned(rays.oz + o);
+      xsimd::select(ok, dx, zero).store_aligned(rays.dx + o);
+      xsimd::select(ok, dy, zero).store_aligned(rays.dy + o);
+      xsimd::select(ok, dz, zero).store_aligned(rays.dz + o);
+      xsimd::select(ok, tmin, zero).store_aligned(rays.tmin + o);
+      xsimd::select(ok, tmax, B(-std::numeric_limits<float>::infinity())).store_aligned(rays.tmax + o);
+    }
+  }
+  rays.active = valid;
+  setup.valid = valid;
+  const bool one_octant = (negx == 0 || negx == valid) && (negy == 0 || negy == valid) && (negz == 0 || negz == valid);
+  setup.uniform = one_octant ? (zeros == 0 ? 3u : 1u) : 0u;
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+int WideKernels<Arch, Test, Robust>::used_lanes(const Block& block) {
+  using I = detail::IntB<Arch>;
+  const I ids = I::load_aligned(reinterpret_cast<const std::int32_t*>(block.prim));
+  const auto used = xsimd::bool_cast(ids != I(static_cast<std::int32_t>(kInvalidPrim)));
+  return std::popcount(detail::bits_from_mask<Arch>(used));
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks,
+                                                     std::uint32_t count, HitPacket<K>& hits) {
+  using LeafPacket = PacketKernels<Arch, Test, K>;
+  const Block& last = blocks[count - 1];
+  const int used = used_lanes(last);
+  if (used > W / 2) return LeafPacket::intersect(prep, blocks, count, hits);
+  if (count > 1) LeafPacket::intersect(prep, blocks, count - 1, hits);
+  for (int j = 0; j < used; ++j) LeafPacket::intersect_triangle(prep, last, j, hits);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+std::uint32_t WideKernels<Arch, Test, Robust>::leaf_occluded(PreparedPacket<K>& prep, const Block* blocks,
+                                                             std::uint32_t count, std::uint32_t lanes) {
+  using LeafPacket = PacketKernels<Arch, Test, K>;
+  const Block& last = blocks[count - 1];
+  const int used = used_lanes(last);
+  if (used > W / 2) return LeafPacket::occluded(prep, blocks, count, lanes);
+  std::uint32_t hit = count > 1 ? LeafPacket::occluded(prep, blocks, count - 1, lanes) : 0u;
+  if (hit == lanes) return hit;
+  // Any hit within [tmin, tmax) of a lane: a closest-hit test against a fresh +inf bound.
+  HitPacket<K> scratch;
+  for (int i = 0; i < K; ++i) scratch.t[i] = std::numeric_limits<float>::infinity(), scratch.prim[i] = kInvalidPrim;
+  const std::uint32_t saved = prep.rays.active;
+  prep.rays.active = lanes & ~hit;
+  for (int j = 0; j < used; ++j) LeafPacket::intersect_triangle(prep, last, j, scratch);
+  prep.rays.active = saved;
+  for (int i = 0; i < K; ++i)
+    if (scratch.prim[i] != kInvalidPrim) hit |= 1u << i;
+  return hit & lanes;
+}
+
+// Frustum traversal of a coherent packet (the interval form of Reshetov et al., "Multi-level
+// ray tracing algorithm", SIGGRAPH 2005; Embree's coherent mode): the slab distances of all
+// lanes are bounded by interval arithmetic on [min, max] of origins and reciprocal
+// directions, so one 8-wide test per node answers "may any lane hit this child?".
+//
+// Conservative by monotonicity, with no padding of its own: for a lane, the oracle's slab
+// distance fl(fl(b - o) * inv) is monotone in o and, for fixed sign of b - o, in inv
+// (rounding to nearest is monotone), so over the packet's box of (o, inv) its extremes are
+// at corners: the near distance is at least min(fl(d * inv_min), fl(d * inv_max)) with
+// d = fl(b - o) for the origin bound that makes d smallest along the ray (inv > 0: o_max;
+// inv < 0: o_min), and the far distance at most the max of the products of the other
+// bound. No NaN arises: every valid lane has a finite, nonzero direction (screen()), so
+// inv is finite and nonzero, and inert children give ±inf products. A child passes when
+// max(near bounds, min tmin) <= min(far bounds, max tfar) * kSlabExitPad, which holds
+// whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
+// exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, PreparedPacket<K>& prep,
+                                                             const detail::PacketSetup<K>& setup,
+                                                             HitPacket<K>& hits) {
+  using V8 = detail::Lanes8<Arch>;
+  using B = detail::FloatB<Arch>;
+  using LeafPacket = PacketKernels<Arch, Test, K>;
+  constexpr int C = K / L;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const RayPacket<K>& rays = prep.rays;
+  const std::uint32_t valid = setup.valid;
+  const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
+  const B pinf(kInf), ninf(-kInf);
+
+  // Per-lane rays (for the leaf box tests) and the packet's intervals.
+  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+  B olo[3] = {pinf, pinf, pinf}, ohi[3] = {ninf, ninf, ninf}, ilo[3] = {pinf, pinf, pinf}, ihi[3] = {ninf, ninf, ninf};
+  B tmin_lo = pinf, tfar_hi = ninf;
+  for (int c = 0; c < C; ++c) {
+    const int o = c * L;
+    const auto ok = detail::mask_from_bits<Arch>((valid >> o) & kChunkBits);
+    ox[c] = B::load_aligned(rays.ox + o);
+    oy[c] = B::load_aligned(rays.oy + o);
+    oz[c] = B::load_aligned(rays.oz + o);
+    ix[c] = B::load_aligned(setup.inv[0] + o);
+    iy[c] = B::load_aligned(setup.inv[1] + o);
+    iz[c] = B::load_aligned(setup.inv[2] + o);
+    tmin[c] = B::load_aligned(rays.tmin + o);
+    B upper = B::load_aligned(rays.tmax + o);
+    if constexpr (!AnyHit) upper = detail::upper_bound<Arch>(B::load_aligned(hits.t + o), upper);
+    tfar[c] = xsimd::select(ok, upper, ninf);
+    const B* org[3] = {&ox[c], &oy[c], &oz[c]};
+    const B* inv[3] = {&ix[c], &iy[c], &iz[c]};
+    for (int a = 0; a < 3; ++a) {
+      olo[a] = xsimd::min(olo[a], xsimd::select(ok, *org[a], pinf));
+      ohi[a] = xsimd::max(ohi[a], xsimd::select(ok, *org[a], ninf));
+      ilo[a] = xsimd::min(ilo[a], xsimd::select(ok, *inv[a], pinf));
+      ihi[a] = xsimd::max(ihi[a], xsimd::select(ok, *inv[a], ninf));
+    }
+    tmin_lo = xsimd::min(tmin_lo, xsimd::select(ok, tmin[c], pinf));
+    tfar_hi = xsimd::max(tfar_hi, tfar[c]);
+  }
+  // Near plane of axis a: bounds[2a + neg]; its differences use the origin bound that
+  // makes them smallest along the ray (inv > 0: o_max, inv < 0: o_min), the far plane the other.
+  int np[3];
+  float o_near[3], o_far[3], i_lo[3], i_hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const float lo = detail::reduce_min<Arch>(olo[a]), hi = detail::reduce_max<Arch>(ohi[a]);
+    i_lo[a] = detail::reduce_min<Arch>(ilo[a]);
+    i_hi[a] = detail::reduce_max<Arch>(ihi[a]);
+    const bool neg = i_hi[a] < 0.0f;
+    np[a] = 2 * a + (neg ? 1 : 0);
+    o_near[a] = neg ? lo : hi;
+    o_far[a] = neg ? hi : lo;
+  }
+  const auto onx = V8::set1(o_near[0]), ony = V8::set1(o_near[1]), onz = V8::set1(o_near[2]);
+  const auto ofx = V8::set1(o_far[0]), ofy = V8::set1(o_far[1]), ofz = V8::set1(o_far[2]);
+  const auto ilx = V8::set1(i_lo[0]), ily = V8::set1(i_lo[1]), ilz = V8::set1(i_lo[2]);
+  const auto ihx = V8::set1(i_hi[0]), ihy = V8::set1(i_hi[1]), ihz = V8::set1(i_hi[2]);
+  const auto tmin8 = V8::set1(detail::reduce_min<Arch>(tmin_lo));
+  const auto pad8 = V8::set1(pad1);
+  float far_hi = detail::reduce_max<Arch>(tfar_hi);
+  const B padb(pad1);
+
+  detail::FrustumItem<Arch> stack[detail::kWideStack];
+  int size = 0;
+  std::uint32_t occluded = 0;
+  std::uint32_t cur = bvh.root;
+  std::uint32_t cur_lanes = valid;
+  for (;;) {
+    if (!(cur & wide_ref::kLeafBit)) {
+      // Interior: the interval slab test of all eight children.
+      const WideNode<N>& node = bvh.nodes[cur];
+      const auto dnx = V8::sub(V8::load(node.bounds[np[0]]), onx);
+      const auto dny = V8::sub(V8::load(node.bounds[np[1]]), ony);
+      const auto dnz = V8::sub(V8::load(node.bounds[np[2]]), onz);
+      const auto dfx = V8::sub(V8::load(node.bounds[np[0] ^ 1]), ofx);
+      const auto dfy = V8::sub(V8::load(node.bounds[np[1] ^ 1]), ofy);
+      const auto dfz = V8::sub(V8::load(node.bounds[np[2] ^ 1]), ofz);
+      const auto tnx = V8::min(V8::mul(dnx, ilx), V8::mul(dnx, ihx));
+      const auto tny = V8::min(V8::mul(dny, ily), V8::mul(dny, ihy));
+      const auto tnz = V8::min(V8::mul(dnz, ilz), V8::mul(dnz, ihz));
+      const auto tfx = V8::max(V8::mul(dfx, ilx), V8::mul(dfx, ihx));
+      const auto tfy = V8::max(V8::mul(dfy, ily), V8::mul(dfy, ihy));
+      const auto tfz = V8::max(V8::mul(dfz, ilz), V8::mul(dfz, ihz));
+      const auto entry = V8::max(V8::max(tnx, tny), V8::max(tnz, tmin8));
+      const auto exit = V8::mul(V8::min(V8::min(tfx, tfy), V8::min(tfz, V8::set1(far_hi))), pad8);
+      std::uint32_t bits = V8::le(entry, exit);
+      if (bits != 0) {
+        alignas(32) float dist[8];
+        V8::store(dist, entry);
+        // Push the hit children far to near (insertion by entry bound); the top is next.
+        const int base = size;
+        for (; bits != 0; bits &= bits - 1) {
+          const int j = std::countr_zero(bits);
+          const std::uint32_t child = node.child[j];
+          std::uint32_t lanes = valid & ~occluded;
+          if (child & wide_ref::kLeafBit) {
+            // A leaf: the oracle's box test per lane, against each lane's own tfar.
+            lanes = 0;
+            for (int c = 0; c < C; ++c) {
+              const B tnx_l = (B(node.bounds[np[0]][j]) - ox[c]) * ix[c];
+              const B tny_l = (B(node.bounds[np[1]][j]) - oy[c]) * iy[c];
+              const B tnz_l = (B(node.bounds[np[2]][j]) - oz[c]) * iz[c];
+              const B tfx_l = (B(node.bounds[np[0] ^ 1][j]) - ox[c]) * ix[c];
+              const B tfy_l = (B(node.bounds[np[1] ^ 1][j]) - oy[c]) * iy[c];
+              const B tfz_l = (B(node.bounds[np[2] ^ 1][j]) - oz[c]) * iz[c];
+              const B e = xsimd::max(tnz_l, xsimd::max(tny_l, xsimd::max(tnx_l, tmin[c])));
+              const B x = xsimd::min(tfz_l, xsimd::min(tfy_l, xsimd::min(tfx_l, tfar[c]))) * padb;
+              lanes |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
+            }
+            lanes &= valid & ~occluded;
+            if (lanes == 0) continue;
+          }
+          int k = size++;
+          for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
+          stack[k] = {child, dist[j], lanes};
+        }
+      }
+    } else {
+      // Leaf: the block kernels on the lanes that entered its box.
+      const std::uint32_t count = (cur >> wide_ref::kCountShift) & wide_ref::kCountMask;
+      const Block* blocks = bvh.blocks + (cur & wide_ref::kFirstMask);
+      const std::uint32_t lanes = cur_lanes & ~occluded;
+      if (count != 0 && lanes != 0) {
+        B hi = ninf;
+        if constexpr (AnyHit) {
+          const std::uint32_t now = leaf_occluded(prep, blocks, count, lanes);
+          if (now != 0) {
+            occluded |= now;
+            if (occluded == valid) return occluded;
+            for (int c = 0; c < C; ++c) {
+              tfar[c] = xsimd::select(detail::mask_from_bits<Arch>((now >> (c * L)) & kChunkBits), ninf, tfar[c]);
+              hi = xsimd::max(hi, tfar[c]);
+            }
+            far_hi = detail::reduce_max<Arch>(hi);
+          }
+        } else {
+          prep.rays.active = lanes;
+          leaf_intersect(prep, blocks, count, hits);
+          for (int c = 0; c < C; ++c) {
+            const B ht = B::load_aligned(hits.t + c * L);
+            tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
+            hi = xsimd::max(hi, tfar[c]);
+          }
+          far_hi = detail::reduce_max<Arch>(hi);
+        }
+      }
+    }
+    // Pop the next subtree some lane may still reach before its tfar.
+    for (;;) {
+      if (size == 0) return occluded;
+      --size;
+      if (stack[size].entry <= far_hi * pad1) break;
+    }
+    cur = stack[size].ref;
+    cur_lanes = stack[size].lanes;
+  }
+}
+
+// Packet traversal after Embree's BVHNIntersectorKHybrid: a stack of (subtree, entry
+// distance per lane), NaN for lanes that did not hit the subtree's box; a lane is active in
+// a subtree while its entry distance is within its current tmax (padded). Children are
+// visited nearest first by the heuristic "any lane enters it before the current best".
+// Uniform: every valid lane has the same octant, so the near and far planes are picked once
+// for the packet instead of per lane.
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit, bool Uniform>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, PreparedPacket<K>& prep,
+                                                            const detail::PacketSetup<K>& setup,
+                                                            HitPacket<K>& hits) {
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  using LeafPacket = PacketKernels<Arch, Test, K>;
+  static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
+  constexpr int C = K / L;  // chunks of L lanes
+  const RayPacket<K>& rays = prep.rays;
+  const std::uint32_t valid = setup.valid;
+  const float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const B inf(std::numeric_limits<float>::infinity());
+  const B pad(Robust ? core::kSlabExitPad : 1.0f);
+
+  // Per chunk: origin, reciprocal direction, octant masks, tmin and the current upper end
+  // tfar (closest hit: min(tmax, hit t); invalid or finished lanes: -inf).
+  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+  M negx[C], negy[C], negz[C];
+  for (int c = 0; c < C; ++c) {
+    const int o = c * L;
+    ox[c] = B::load_aligned(rays.ox + o);
+    oy[c] = B::load_aligned(rays.oy + o);
+    oz[c] = B::load_aligned(rays.oz + o);
+    ix[c] = B::load_aligned(setup.inv[0] + o);
+    iy[c] = B::load_aligned(setup.inv[1] + o);
+    iz[c] = B::load_aligned(setup.inv[2] + o);
+    negx[c] = ix[c] < B(0.0f);
+    negy[c] = iy[c] < B(0.0f);
+    negz[c] = iz[c] < B(0.0f);
+    tmin[c] = B::load_aligned(rays.tmin + o);
+    const M ok = detail::mask_from_bits<Arch>((valid >> o) & kChunkBits);
+    B upper = B::load_aligned(rays.tmax + o);
+    if constexpr (!AnyHit) upper = detail::upper_bound<Arch>(B::load_aligned(hits.t + o), upper);
+    tfar[c] = xsimd::select(ok, upper, -inf);
+  }
+  // Uniform octant: the plane arrays of a valid lane's octant.
+  const int lane0 = std::countr_zero(valid);
+  const int nx = Uniform && setup.inv[0][lane0] < 0.0f ? 1 : 0;
+  const int ny = Uniform && setup.inv[1][lane0] < 0.0f ? 3 : 2;
+  const int nz = Uniform && setup.inv[2][lane0] < 0.0f ? 5 : 4;
+
+  alignas(64) float stack_dist[detail::kWideStack][K];
+  std::uint32_t stack_ref[detail::kWideStack];
+  int size = 0;
+  std::uint32_t occluded = 0;
+
+  std::uint32_t cur = bvh.root;
+  B cur_dist[C];
+  for (int c = 0; c < C; ++c)
+    cur_dist[c] = xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), tmin[c], B(kNaN));
+
+  for (;;) {
+    // Lanes active in `cur`: entry within the current upper end (NaN: not entered).
+    M act[C];
+    std::uint32_t bits = 0;
+    for (int c = 0; c < C; ++c) {
+      act[c] = cur_dist[c] <= tfar[c] * pad;
+      bits |= detail::bits_from_mask<Arch>(act[c]) << (c * L);
+    }
+    if constexpr (AnyHit) bits &= ~occluded;
+    if (bits != 0 && std::popcount(bits) <= kPacketSwitchLanes) {
+      // Few lanes left: the rest of this subtree one ray at a time.
+      alignas(64) float far_lanes[K];
+      for (int c = 0; c < C; ++c) tfar[c].store_aligned(far_lanes + c * L);
+      for (std::uint32_t b = bits; b != 0; b &= b - 1) {
+        const int i = std::countr_zero(b);
+        const Ray r{{rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]},
+                    rays.tmax[i]};
+        const PreparedRay pr = prepare_ray(r, Test == TriangleTest::watertight);
+        if constexpr (AnyHit) {
+          Hit unused;
+          if (trace_single<true>(bvh, pr, cur, unused)) {
+            occluded |= 1u << i;
+            far_lanes[i] = -std::numeric_limits<float>::infinity();
+          }
+        } else {
+          Hit h{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
+          if (trace_single<false>(bvh, pr, cur, h)) {
+            hits.t[i] = h.t, hits.u[i] = h.u, hits.v[i] = h.v, hits.prim[i] = h.prim;
+            far_lanes[i] = h.t;
+          }
+        }
+      }
+      for (int c = 0; c < C; ++c) tfar[c] = B::load_aligned(far_lanes + c * L);
+      if (AnyHit && occluded == valid) return occluded;
+      bits = 0;
+    }
+    if (bits != 0) {
+      if (!(cur & wide_ref::kLeafBit)) {
+        // Interior: each child against the active lanes; keep the first-entered child as the
+        // next `cur`, push the others.
+        const WideNode<N>& node = bvh.nodes[cur];
+        std::uint32_t next = wide_ref::kEmptyRef;
+        B next_dist[C];
+        for (int c = 0; c < C; ++c) next_dist[c] = B(kNaN);
+        for (int j = 0; j < N; ++j) {
+          const std::uint32_t child = node.child[j];
+          if (child == wide_ref::kEmptyRef) break;  // used children come first
+          B dist[C];
+          bool any = false;
+          for (int c = 0; c < C; ++c) {
+            if (!xsimd::any(act[c])) {
+              dist[c] = B(kNaN);
+              continue;
+            }
+            B tnx, tny, tnz, tfx, tfy, tfz;
+            if constexpr (Uniform) {
+              tnx = (B(node.bounds[nx][j]) - ox[c]) * ix[c];
+              tny = (B(node.bounds[ny][j]) - oy[c]) * iy[c];
+              tnz = (B(node.bounds[nz][j]) - oz[c]) * iz[c];
+              tfx = (B(node.bounds[nx ^ 1][j]) - ox[c]) * ix[c];
+              tfy = (B(node.bounds[ny ^ 1][j]) - oy[c]) * iy[c];
+              tfz = (B(node.bounds[nz ^ 1][j]) - oz[c]) * iz[c];
+            } else {
+              const B lx = (B(node.bounds[0][j]) - ox[c]) * ix[c], hx = (B(node.bounds[1][j]) - ox[c]) * ix[c];
+              const B ly = (B(node.bounds[2][j]) - oy[c]) * iy[c], hy = (B(node.bounds[3][j]) - oy[c]) * iy[c];
+              const B lz = (B(node.bounds[4][j]) - oz[c]) * iz[c], hz = (B(node.bounds[5][j]) - oz[c]) * iz[c];
+              tnx = xsimd::select(negx[c], hx, lx), tfx = xsimd::select(negx[c], lx, hx);
+              tny = xsimd::select(negy[c], hy, ly), tfy = xsimd::select(negy[c], ly, hy);
+              tnz = xsimd::select(negz[c], hz, lz), tfz = xsimd::select(negz[c], lz, hz);
+            }
+            // NaN-safe order: xsimd::max/min(distance, running) is maxps/minps with the
+            // running bound second.
+            const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
+            const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
+            const M hit = act[c] & (entry <= exit);
+            dist[c] = xsimd::select(hit, entry, B(kNaN));
+            any = any || xsimd::any(hit);
+          }
+          if (!any) continue;
+          if (next == wide_ref::kEmptyRef) {
+            next = child;
+            for (int c = 0; c < C; ++c) next_dist[c] = dist[c];
+            continue;
+          }
+          bool nearer = false;
+          for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
+          float* slot = stack_dist[size];
+          if (nearer) {
+            stack_ref[size++] = next;
+            for (int c = 0; c < C; ++c) {
+              next_dist[c].store_aligned(slot + c * L);
+              next_dist[c] = dist[c];
+            }
+            next = child;
+          } else {
+            stack_ref[size++] = child;
+            for (int c = 0; c < C; ++c) dist[c].store_aligned(slot + c * L);
+          }
+        }
+        if (next != wide_ref::kEmptyRef) {
+          cur = next;
+          for (int c = 0; c < C; ++c) cur_dist[c] = next_dist[c];
+          continue;
+        }
+      } else {
+        // Leaf: the block kernels on the active lanes.
+        const std::uint32_t count = (cur >> wide_ref::kCountShift) & wide_ref::kCountMask;
+        const Block* blocks = bvh.blocks + (cur & wide_ref::kFirstMask);
+        if (count != 0) {
+          if constexpr (AnyHit) {
+            const std::uint32_t now = leaf_occluded(prep, blocks, count, bits);
+            if (now != 0) {
+              occluded |= now;
+              if (occluded == valid) return occluded;
+              for (int c = 0; c < C; ++c)
+                tfar[c] = xsimd::select(detail::mask_from_bits<Arch>((now >> (c * L)) & kChunkBits), -inf, tfar[c]);
+            }
+          } else {
+            prep.rays.active = bits;
+            leaf_intersect(prep, blocks, count, hits);
+            for (int c = 0; c < C; ++c) {
+              const B ht = B::load_aligned(hits.t + c * L);
+              tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
+            }
+          }
+        }
+      }
+    }
+    // Pop the next subtree.
+    if (size == 0) return occluded;
+    --size;
+    cur = stack_ref[size];
+    for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[size] + c * L);
+  }
+}
+
+// Explicit instantiation declarations: the definitions live in the per-ISA files only.
+// Robust = false (the mutation test's unpadded variant) for the watertight test only.
+extern template struct WideKernels<Sse42, TriangleTest::moller>;
+extern template struct WideKernels<Sse42, TriangleTest::plane>;
+extern template struct WideKernels<Sse42, TriangleTest::watertight>;
+extern template struct WideKernels<Sse42, TriangleTest::watertight, false>;
+extern template struct WideKernels<Avx2, TriangleTest::moller>;
+extern template struct WideKernels<Avx2, TriangleTest::plane>;
+extern template struct WideKernels<Avx2, TriangleTest::watertight>;
+extern template struct WideKernels<Avx2, TriangleTest::watertight, false>;
+extern template struct WideKernels<Avx512, TriangleTest::moller>;
+extern template struct WideKernels<Avx512, TriangleTest::plane>;
+extern template struct WideKernels<Avx512, TriangleTest::watertight>;
+extern template struct WideKernels<Avx512, TriangleTest::watertight, false>;
+
+}  // namespace volley::simd
