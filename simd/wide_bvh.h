@@ -12,7 +12,7 @@
 namespace volley::simd {
 
 /// BVH width: children per node. 8 children are one AVX register per box plane; SSE tests
-/// them as two halves (measured against N = 4 in perf/: see wide_accel.h).
+/// them as two halves (N = 4 for SSE was not measured).
 inline constexpr int kWideN = 8;
 
 /// One N-wide node: the boxes of its children in SoA (a plane per array, the slab test of

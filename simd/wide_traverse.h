@@ -43,12 +43,9 @@ namespace volley::simd {
 inline constexpr int kWidePacket = 16;
 
 /// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
-/// lanes (or fewer) are still active in it (Embree's "switch threshold"; measured in
-/// perf/wide_bvh.md).
+/// lanes (or fewer) are still active in it (Embree's "switch threshold"). Measured on Sponza
+/// shadow and diffuse packets: 1 to 5 within noise of each other, 0 (never) and 8 slower.
 inline constexpr int kPacketSwitchLanes = 3;
-
-/// Coherent packets (one octant, no zero direction component) take the frustum walk.
-inline constexpr bool kFrustum = true;
 
 namespace detail {
 /// The lane setup of a packet, computed once by WideKernels::screen.
@@ -56,8 +53,8 @@ template <int K>
 struct alignas(64) PacketSetup {
   float inv[3][K];         // 12K bytes: 1 / dir per lane, as the oracle (±inf for ±0)
   std::uint32_t valid;     //  4 bytes: the active lanes the oracle does not reject
-  std::uint32_t uniform;   //  4 bytes: 0 mixed octants; 1 one octant; 3 one octant and no
-                           //           zero direction component (the frustum walk applies)
+  std::uint32_t uniform;   //  4 bytes: 0 mixed octants; 1 one octant; 3 one octant, one
+                           //           origin, no zero direction component (frustum walk)
 };
 }  // namespace detail
 
@@ -78,7 +75,11 @@ struct WideView {
 /// Semantics, all forms: the answers of the scalar oracle's closest-hit / any-hit
 /// traversal with the same triangle test (same hit / miss; same prim, or the same t when
 /// two triangles tie). Rays with a non-finite origin or direction component, or a NaN
-/// tmin or tmax, hit nothing (as core::traverse_leaves).
+/// tmin or tmax, hit nothing (as core::traverse_leaves). Visit order differs between the
+/// forms, and the oracle's watertight test compares t against the current bound in scaled
+/// form, so between two overlapping coplanar triangles whose t differ by an ulp or two the
+/// form that meets the farther one first may keep it (4 of 262144 primary rays on
+/// conference before its camera file; the oracle's own traversal does the same).
 template <class Arch, TriangleTest Test, bool Robust = true>
 struct WideKernels {
   static constexpr int N = kWideN;
@@ -107,6 +108,11 @@ struct WideKernels {
   static bool trace_single(const View& bvh, const PreparedRay& ray, std::uint32_t start, Hit& hit);
 
  private:
+  /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
+  /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
+  template <bool AnyHit, bool NoZero>
+  static bool walk(const View& bvh, const PreparedRay& ray, float inv[3], std::uint32_t start, Hit& hit);
+
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
   /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
@@ -115,7 +121,10 @@ struct WideKernels {
   static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
   /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
-  /// zero direction component (screen() says so).
+  /// zero direction component (screen() says so); taken only for packets whose lanes share
+  /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
+  /// hit points) the interval frustum grows loose and the per-lane walk was measured 2-3x
+  /// faster (Sponza, conference), while for one origin the frustum walk was 1.3-1.8x faster.
   template <bool AnyHit>
   static std::uint32_t trace_frustum(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
                                      HitPacket<K>& hits);
@@ -202,7 +211,8 @@ template <class Arch>
 float reduce_min(FloatB<Arch> v) {
   __m128 m;
   if constexpr (kLanes<Arch> == 16) {
-    return _mm512_reduce_min_ps(v);
+    const __m256 h = _mm256_min_ps(_mm512_castps512_ps256(v), _mm512_extractf32x8_ps(v, 1));
+    m = _mm_min_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
   } else if constexpr (kLanes<Arch> == 8) {
     m = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   } else {
@@ -218,7 +228,8 @@ template <class Arch>
 float reduce_max(FloatB<Arch> v) {
   __m128 m;
   if constexpr (kLanes<Arch> == 16) {
-    return _mm512_reduce_max_ps(v);
+    const __m256 h = _mm256_max_ps(_mm512_castps512_ps256(v), _mm512_extractf32x8_ps(v, 1));
+    m = _mm_max_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
   } else if constexpr (kLanes<Arch> == 8) {
     m = _mm_max_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   } else {
@@ -242,24 +253,32 @@ template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit>
 bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const PreparedRay& pr, std::uint32_t start,
                                                    Hit& hit) {
-  using V8 = detail::Lanes8<Arch>;
-  using Leaf = RayBlockKernels<Arch, Test>;
-  static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;
   if (start == wide_ref::kEmptyRef) return false;
   // Rejected as by the oracle: non-finite origin or direction, NaN interval ends.
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(ray.org[a]) || !std::isfinite(ray.dir[a])) return false;
   if (std::isnan(ray.tmin) || std::isnan(ray.tmax)) return false;
-
-  // Slab-test setup, the oracle's make_box_ray: reciprocal direction (±inf for ±0) and
-  // the octant by its sign bit; near plane of axis a is bounds[2a + neg], far the other.
+  // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component.
   float inv[3];
+  for (int a = 0; a < 3; ++a) inv[a] = 1.0f / ray.dir[a];
+  if (ray.dir[0] != 0.0f && ray.dir[1] != 0.0f && ray.dir[2] != 0.0f)
+    return walk<AnyHit, true>(bvh, pr, inv, start, hit);
+  return walk<AnyHit, false>(bvh, pr, inv, start, hit);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit, bool NoZero>
+bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, float inv[3], std::uint32_t start,
+                                           Hit& hit) {
+  using V8 = detail::Lanes8<Arch>;
+  using Leaf = RayBlockKernels<Arch, Test>;
+  static_assert(N == 8, "the single-ray node test reads eight children");
+  const Ray& ray = pr.ray;
+  // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
+  // far the other.
   int near_plane[3];
-  for (int a = 0; a < 3; ++a) {
-    inv[a] = 1.0f / ray.dir[a];
-    near_plane[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
-  }
+  for (int a = 0; a < 3; ++a) near_plane[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
   const int fx = near_plane[0] ^ 1, fy = near_plane[1] ^ 1, fz = near_plane[2] ^ 1;
   const int nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
   const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
@@ -270,6 +289,7 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
 
   // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
   float tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+  auto tmax8 = V8::set1(tmax * pad1);
   detail::WideStackItem<Arch> stack[detail::kWideStack];
   int size = 0;
   bool found = false;
@@ -281,12 +301,21 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
       const auto tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
       const auto tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
       const auto tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
-      const auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), ix);
-      const auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), iy);
-      const auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), iz);
-      const auto entry = V8::max(tnz, V8::max(tny, V8::max(tnx, tmin)));
-      auto exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, V8::set1(tmax))));
-      if constexpr (Robust) exit = V8::mul(exit, pad);
+      auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), ix);
+      auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), iy);
+      auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), iz);
+      // The padding applied to each far distance before the min: rounding is monotone, so
+      // min(fl(a p), fl(b p)) = fl(min(a, b) p) bit for bit, one step less on the chain.
+      if constexpr (Robust) tfx = V8::mul(tfx, pad), tfy = V8::mul(tfy, pad), tfz = V8::mul(tfz, pad);
+      typename V8::V entry, exit;
+      if constexpr (NoZero) {
+        // No NaN distance: combine as a tree.
+        entry = V8::max(V8::max(tnx, tny), V8::max(tnz, tmin));
+        exit = V8::min(V8::min(tfx, tfy), V8::min(tfz, tmax8));
+      } else {
+        entry = V8::max(tnz, V8::max(tny, V8::max(tnx, tmin)));
+        exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, tmax8)));
+      }
       std::uint32_t bits = V8::le(entry, exit);
       if (bits != 0) {
         alignas(32) float dist[8];
@@ -337,6 +366,7 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
         Leaf::intersect(pr, blocks, count, hit);
         if (hit.t < tmax) {
           tmax = hit.t;
+          tmax8 = V8::set1(tmax * pad1);
           found = true;
         }
       }
@@ -375,7 +405,7 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket
   screen(prep.rays, setup);
   if (setup.valid == 0) return;
   PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
-  if (setup.uniform == 3 && kFrustum)
+  if (setup.uniform == 3)
     trace_frustum<false>(bvh, prep, setup, hits);
   else if (setup.uniform != 0)
     trace_packet<false, true>(bvh, prep, setup, hits);
@@ -393,7 +423,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
   HitPacket<K> unused;
-  if (setup.uniform == 3 && kFrustum) return trace_frustum<true>(bvh, prep, setup, unused);
+  if (setup.uniform == 3) return trace_frustum<true>(bvh, prep, setup, unused);
   return setup.uniform != 0 ? trace_packet<true, true>(bvh, prep, setup, unused)
                             : trace_packet<true, false>(bvh, prep, setup, unused);
 }
@@ -404,7 +434,9 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   using M = detail::MaskB<Arch>;
   constexpr int C = K / L;
   const B zero(0.0f);
-  std::uint32_t valid = 0, negx = 0, negy = 0, negz = 0, zeros = 0;
+  std::uint32_t valid = 0, negx = 0, negy = 0, negz = 0, zeros = 0, other_origin = 0;
+  const int first = std::countr_zero(rays.active | (1u << (K - 1)));
+  const B fx(rays.ox[first]), fy(rays.oy[first]), fz(rays.oz[first]);
   for (int c = 0; c < C; ++c) {
     const int o = c * L;
     const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
@@ -425,6 +457,7 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
     negy |= (detail::bits_from_mask<Arch>(iy < zero) & okb) << o;
     negz |= (detail::bits_from_mask<Arch>(iz < zero) & okb) << o;
     zeros |= (detail::bits_from_mask<Arch>((dx == zero) | (dy == zero) | (dz == zero)) & okb) << o;
+    other_origin |= (detail::bits_from_mask<Arch>((ox != fx) | (oy != fy) | (oz != fz)) & okb) << o;
     // Rejected lanes become inert: org = dir = 0, tmin = 0, tmax = -inf.
     if (okb != kChunkBits) {
       xsimd::select(ok, ox, zero).store_aligned(rays.ox + o);
@@ -440,7 +473,7 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   rays.active = valid;
   setup.valid = valid;
   const bool one_octant = (negx == 0 || negx == valid) && (negy == 0 || negy == valid) && (negz == 0 || negz == valid);
-  setup.uniform = one_octant ? (zeros == 0 ? 3u : 1u) : 0u;
+  setup.uniform = one_octant ? (zeros == 0 && other_origin == 0 ? 3u : 1u) : 0u;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -506,7 +539,6 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
                                                              HitPacket<K>& hits) {
   using V8 = detail::Lanes8<Arch>;
   using B = detail::FloatB<Arch>;
-  using LeafPacket = PacketKernels<Arch, Test, K>;
   constexpr int C = K / L;
   constexpr float kInf = std::numeric_limits<float>::infinity();
   const RayPacket<K>& rays = prep.rays;
@@ -673,7 +705,6 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
                                                             HitPacket<K>& hits) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
-  using LeafPacket = PacketKernels<Arch, Test, K>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
   constexpr int C = K / L;  // chunks of L lanes
   const RayPacket<K>& rays = prep.rays;
@@ -773,7 +804,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
               dist[c] = B(kNaN);
               continue;
             }
-            B tnx, tny, tnz, tfx, tfy, tfz;
+            B tnx(0.0f), tny(0.0f), tnz(0.0f), tfx(0.0f), tfy(0.0f), tfz(0.0f);  // set below
             if constexpr (Uniform) {
               tnx = (B(node.bounds[nx][j]) - ox[c]) * ix[c];
               tny = (B(node.bounds[ny][j]) - oy[c]) * iy[c];

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "accel/accel_impl.h"
+#include "simd/dispatch.h"
 
 namespace volley {
 
@@ -74,6 +75,36 @@ bool Accel::occluded(const Ray& ray) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
   return impl_->occluded(ray);
 }
+
+template <int K>
+void Accel::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  impl_->intersect(rays, hits);
+}
+
+template <int K>
+std::uint32_t Accel::occluded(const RayPacket<K>& rays) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  return impl_->occluded(rays);
+}
+
+void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  impl_->intersect(rays, count, hits);
+}
+
+void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  impl_->occluded(rays, count, blocked);
+}
+
+// The packet widths of the API.
+template void Accel::intersect<4>(const RayPacket<4>&, HitPacket<4>&) const;
+template void Accel::intersect<8>(const RayPacket<8>&, HitPacket<8>&) const;
+template void Accel::intersect<16>(const RayPacket<16>&, HitPacket<16>&) const;
+template std::uint32_t Accel::occluded<4>(const RayPacket<4>&) const;
+template std::uint32_t Accel::occluded<8>(const RayPacket<8>&) const;
+template std::uint32_t Accel::occluded<16>(const RayPacket<16>&) const;
 
 AccelInfo Accel::info() const { return impl_->info(); }
 

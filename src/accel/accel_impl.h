@@ -1,6 +1,8 @@
 // Accel's private state and query paths. One BVH over triangles and one over polygons,
 // each built only when the scene has that kind. Triangle data is kept in the layout of
-// the chosen test only: plane precomputation for `plane`, raw vertices otherwise.
+// the chosen test only: with a SIMD ISA the wide BVH over triangle blocks (WideAccel);
+// with Isa::scalar the oracle's binary BVH and plane precomputation for `plane`, raw
+// vertices otherwise.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -8,12 +10,12 @@
 
 #include <glm/glm.hpp>
 
+#include "accel/wide_accel.h"
 #include "core/bvh.h"
 #include "core/polygon.h"
 #include "core/triangle.h"
-#include "simd/dispatch.h"
-#include "simd/triangle_kernels.h"
 #include "volley/accel.h"
+#include "volley/packet.h"
 
 namespace volley {
 
@@ -31,25 +33,31 @@ struct Accel::Impl {
   Isa isa = Isa::scalar;
   double build_seconds = 0.0;
   std::size_t degenerate = 0;
-  core::Bvh triangle_bvh;
+  core::Bvh triangle_bvh;  ///< scalar path only (the SIMD path keeps the wide BVH)
   core::Bvh polygon_bvh;
-  core::BvhBuildOptions build_options;
+  core::BvhBuildOptions build_options;          ///< of the triangle BVH
+  core::BvhStats triangle_stats;                 ///< of the binary triangle BVH, as built
   std::vector<core::PlaneTriangle<float>> plane_triangles;  ///< scalar `plane` only
-  /// SIMD path (isa != scalar): triangle blocks per BVH leaf, indexed by node.
-  std::unique_ptr<simd::TriangleKernels> kernels;
-  std::vector<simd::BlockRange> node_blocks;
+  /// SIMD path (isa != scalar): the wide BVH over triangle blocks.
+  std::unique_ptr<accel::WideAccel> wide;
 
   void build();
   Hit intersect(const Ray& ray) const;
   bool occluded(const Ray& ray) const;
+  template <int K>
+  void intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const;
+  template <int K>
+  std::uint32_t occluded(const RayPacket<K>& rays) const;
+  void intersect(const Ray* rays, std::size_t count, Hit* hits) const;
+  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const;
   AccelInfo info() const;
 
  private:
-  void build_blocks();
   template <bool AnyHit>
   bool trace_triangles_scalar(const core::RayT<float>& ray, Hit& hit) const;
+  /// Polygons nearer than `tmax`: updates `hit` (closest) or answers at the first one.
   template <bool AnyHit>
-  bool trace_triangles_simd(const Ray& ray, Hit& hit) const;
+  bool trace_polygons(const core::RayT<float>& ray, Hit& hit) const;
   template <bool AnyHit>
   bool trace(const Ray& ray, Hit& hit) const;
 };

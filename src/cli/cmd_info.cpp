@@ -34,8 +34,13 @@ Runner register_info(CLI::App& app) {
                 desc.settings.width, desc.settings.height);
     std::printf("kernel      test %s, isa %s\n", std::string(to_string(info.test)).c_str(),
                 std::string(to_string(info.isa)).c_str());
-    std::printf("bvh         %zu nodes, %zu leaves, depth %zu, %.2f primitives/leaf, SAH cost %.2f\n", info.nodes,
-                info.leaves, info.depth, info.mean_leaf_size, info.sah_cost);
+    std::printf("bvh         %d-wide: %zu nodes (%.2f children each), %zu leaves, depth %zu, %.2f primitives/leaf, "
+                "SAH cost %.2f (binary binned-SAH tree: %.2f)\n",
+                info.width, info.nodes, info.mean_children, info.leaves, info.depth, info.mean_leaf_size, info.sah_cost,
+                info.binary_sah_cost);
+    if (info.blocks)
+      std::printf("blocks      %zu of %d triangles, %.0f%% of lanes used\n", info.blocks, info.block_width,
+                  100.0 * info.block_fill);
     std::printf("memory      %zu bytes, %.1f bytes/primitive\n", info.bytes,
                 double(info.bytes) / double(std::max<std::size_t>(1, info.triangles + info.polygons)));
     std::printf("build       %.3f s (%.2f M primitives/s)\n", info.build_seconds,

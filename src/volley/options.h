@@ -4,6 +4,8 @@
 #include <string>
 #include <string_view>
 
+#include "volley/export.h"
+
 namespace volley {
 
 /// Ray/triangle test used by an Accel. Each builds its own triangle layout.
@@ -15,21 +17,27 @@ enum class TriangleTest {
 
 /// Instruction set for the kernels. `automatic` picks the best the CPU supports
 /// (overridden by the VOLLEY_ISA environment variable); `scalar` runs the oracle.
-enum class Isa { automatic, scalar, sse42, avx2, avx512 };
+enum class Isa {
+  automatic,  ///< the widest the CPU supports, unless VOLLEY_ISA names one
+  scalar,     ///< the scalar oracle (binary BVH, one triangle at a time)
+  sse42,      ///< SSE4.2: 4 lanes
+  avx2,       ///< AVX2 + FMA: 8 lanes
+  avx512,     ///< AVX-512 (F, DQ, BW, VL): 16 lanes
+};
 
 /// Options fixed at Accel::commit.
 struct Options {
-  TriangleTest test = TriangleTest::watertight;
-  Isa isa = Isa::automatic;
+  TriangleTest test = TriangleTest::watertight;  ///< ray/triangle test (and triangle layout)
+  Isa isa = Isa::automatic;                      ///< kernel ISA; commit throws Error if the CPU lacks it
 };
 
 /// Names as used on the command line ("plane", "moller", "watertight").
-std::string_view to_string(TriangleTest test);
+VOLLEY_API std::string_view to_string(TriangleTest test);
 /// Names as used on the command line ("auto", "scalar", "sse4.2", "avx2", "avx512").
-std::string_view to_string(Isa isa);
+VOLLEY_API std::string_view to_string(Isa isa);
 /// Parses a command-line name; std::nullopt for an unknown name.
-std::optional<TriangleTest> parse_triangle_test(std::string_view name);
+VOLLEY_API std::optional<TriangleTest> parse_triangle_test(std::string_view name);
 /// Parses a command-line name; std::nullopt for an unknown name.
-std::optional<Isa> parse_isa(std::string_view name);
+VOLLEY_API std::optional<Isa> parse_isa(std::string_view name);
 
 }  // namespace volley

@@ -1,0 +1,89 @@
+// WideAccel: the type-erased facade (baseline code). Each implementation forwards to the
+// traversal kernels instantiated in the per-ISA files (extern templates in
+// simd/wide_traverse.h), so nothing here is compiled with wider instructions.
+#include "accel/wide_accel.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "accel/wide_build.h"
+#include "simd/aligned.h"
+#include "simd/dispatch.h"
+#include "simd/prepared_ray.h"
+#include "simd/wide_traverse.h"
+
+namespace volley::accel {
+namespace {
+
+template <class Arch, TriangleTest Test, bool Robust>
+class WideAccelFor final : public WideAccel {
+ public:
+  using Kernels = simd::WideKernels<Arch, Test, Robust>;
+  using Block = typename Kernels::Block;
+  static constexpr int W = Kernels::W;
+  static constexpr bool kShear = Test == TriangleTest::watertight;
+
+  int block_width() const override { return W; }
+
+  void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) override {
+    stats_ = build_wide<Test, W>(bvh, xyz, ids, nodes_, blocks_, root_);
+  }
+  const simd::WideStats& stats() const override { return stats_; }
+
+  void intersect(const Ray& ray, Hit& hit) const override {
+    Kernels::intersect(view(), simd::prepare_ray(ray, kShear), hit);
+  }
+  bool occluded(const Ray& ray) const override { return Kernels::occluded(view(), simd::prepare_ray(ray, kShear)); }
+  void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override {
+    Kernels::intersect(view(), rays, hits);
+  }
+  std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view(), rays); }
+
+ private:
+  typename Kernels::View view() const { return {nodes_.data(), blocks_.data(), root_}; }
+
+  simd::AlignedVector<simd::WideNode<simd::kWideN>> nodes_;
+  simd::AlignedVector<Block> blocks_;
+  std::uint32_t root_ = simd::wide_ref::kEmptyRef;
+  simd::WideStats stats_;
+};
+
+template <class Arch>
+std::unique_ptr<WideAccel> make_for(TriangleTest test, bool robust) {
+  if (!robust) {
+    if (test != TriangleTest::watertight)
+      throw std::invalid_argument("WideAccel::create: the unpadded variant exists for the watertight test only");
+    return std::make_unique<WideAccelFor<Arch, TriangleTest::watertight, false>>();
+  }
+  switch (test) {
+    case TriangleTest::plane:
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::plane, true>>();
+    case TriangleTest::moller:
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::moller, true>>();
+    case TriangleTest::watertight:
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::watertight, true>>();
+  }
+  throw std::invalid_argument("WideAccel::create: unknown triangle test");
+}
+
+}  // namespace
+
+std::unique_ptr<WideAccel> WideAccel::create(TriangleTest test, Isa isa, bool robust) {
+  if (isa == Isa::automatic || isa == Isa::scalar)
+    throw std::invalid_argument("WideAccel::create: resolve the ISA first (scalar runs the oracle)");
+  if (!simd::cpu_has(isa))
+    throw std::invalid_argument("WideAccel::create: this CPU does not support " + std::string(to_string(isa)));
+  switch (isa) {
+    case Isa::sse42:
+      return make_for<simd::Sse42>(test, robust);
+    case Isa::avx2:
+      return make_for<simd::Avx2>(test, robust);
+    case Isa::avx512:
+      return make_for<simd::Avx512>(test, robust);
+    default:
+      break;
+  }
+  throw std::invalid_argument("WideAccel::create: unknown ISA");
+}
+
+}  // namespace volley::accel

@@ -1,0 +1,46 @@
+// The wide BVH of one triangle test on one ISA, type-erased for Accel: owns the nodes and
+// triangle blocks, forwards queries to the traversal kernels instantiated in the per-ISA
+// files (simd/wide_traverse.h). No xsimd here: Accel compiles at the baseline ISA.
+#pragma once
+#include <cstdint>
+#include <memory>
+
+#include "core/bvh.h"
+#include "simd/wide_bvh.h"
+#include "volley/options.h"
+#include "volley/packet.h"
+#include "volley/ray.h"
+
+namespace volley::accel {
+
+/// A wide BVH over triangle blocks for one (test, ISA). Built once with build(); then
+/// immutable, and every query is const and thread-safe. Answers agree with the scalar
+/// oracle's traversal of the same test: same hit / miss, same prim or the same t at a tie.
+class WideAccel {
+ public:
+  /// Kernels of `test` for `isa` (resolved: sse42, avx2 or avx512, supported by this CPU).
+  /// robust = false (watertight only) drops the slab padding: a mutation kept for the test
+  /// that shows the padding matters; never use it for answers. Throws std::invalid_argument.
+  static std::unique_ptr<WideAccel> create(TriangleTest test, Isa isa, bool robust = true);
+  virtual ~WideAccel() = default;
+
+  /// W: triangles per block (4, 8, 16 for sse42, avx2, avx512).
+  virtual int block_width() const = 0;
+  /// Collapses `bvh` (a binary BVH over triangles: triangle i has vertices xyz[9i .. 9i+9)
+  /// and id ids[i]) and packs its leaves (accel::build_wide). Replaces an earlier build.
+  virtual void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) = 0;
+  /// Size and quality of the built structure.
+  virtual const simd::WideStats& stats() const = 0;
+
+  /// Closest hit: updates `hit` with a triangle hit at tmin <= t < min(hit.t, tmax).
+  virtual void intersect(const Ray& ray, Hit& hit) const = 0;
+  /// Any hit with tmin <= t < tmax.
+  virtual bool occluded(const Ray& ray) const = 0;
+  /// Closest hits of the active lanes (hits.t bounds each lane's search; only lanes with a
+  /// nearer hit are written).
+  virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const = 0;
+  /// Mask of the active lanes that something occludes.
+  virtual std::uint32_t occluded(const RayPacket<16>& rays) const = 0;
+};
+
+}  // namespace volley::accel

@@ -1,0 +1,33 @@
+// Building the wide BVH (simd/wide_bvh.h) from the scalar oracle's binary BVH: the
+// collapse into N-wide nodes and the packing of every leaf into triangle blocks.
+#pragma once
+#include <cstdint>
+
+#include "core/bvh.h"
+#include "simd/aligned.h"
+#include "simd/triangle_blocks.h"
+#include "simd/wide_bvh.h"
+#include "volley/options.h"
+
+namespace volley::accel {
+
+/// Collapses `bvh` (binary, over triangles numbered as its prim_index) into kWideN-wide
+/// nodes and packs each of its leaves into blocks of W triangles (simd::pack_blocks).
+///
+/// Collapse (as Embree's BVH8 builder): a wide node starts with the two children of a binary
+/// node and repeatedly replaces its interior child of largest surface area by that child's
+/// two children, until it has kWideN children or only leaves. Children with an empty box
+/// (the builder's subtree of degenerate triangles, which no ray can hit) are left out, the
+/// others keep the binary node's box bit for bit (so the slab tests agree with the oracle's).
+/// Interior children of a node are allocated next to each other, depth first; leaves' blocks
+/// in the order the collapse meets them. Unused child slots are inert.
+///
+/// Triangle i (an index into bvh.prim_index's range) has vertices xyz[9i .. 9i + 9) and id
+/// ids[i]. Block packing runs in parallel on oneTBB. Throws std::length_error when a leaf
+/// needs more than wide_ref::kMaxLeafBlocks blocks or the BVH more than kMaxBlocks.
+template <TriangleTest Test, int W>
+simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids,
+                           simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,
+                           simd::AlignedVector<simd::BlockFor<Test, W>>& blocks, std::uint32_t& root);
+
+}  // namespace volley::accel

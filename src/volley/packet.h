@@ -1,0 +1,107 @@
+// volley public API: SoA packets of K rays (K = 4, 8, 16) and their hits, and the
+// conversions from and to the AoS volley::Ray / volley::Hit. Plain data, C++17, standard
+// library only: the kernels (simd/), the renderer and embedders share these types.
+#pragma once
+#include <cstdint>
+#include <limits>
+
+#include "volley/ray.h"
+
+namespace volley {
+
+/// K rays in structure-of-arrays form, 64-byte aligned.
+/// Lane i is active when bit i of `active` is set. Inactive lanes must be inert: the
+/// loaders give them org = dir = 0, tmin = 0, tmax = -inf, so no kernel can report a
+/// hit for them even before it looks at `active`. Kernels read all K lanes.
+template <int K>
+struct alignas(64) RayPacket {
+  static_assert(K == 4 || K == 8 || K == 16, "K rays per packet: 4, 8 or 16");
+  float ox[K], oy[K], oz[K];  // 12K bytes: origins
+  float dx[K], dy[K], dz[K];  // 12K bytes: directions (need not be normalized)
+  float tmin[K], tmax[K];     //  8K bytes: search interval tmin <= t < tmax
+  std::uint32_t active;       //  4 bytes (padded to 64): bit i = lane i is in use
+};
+static_assert(sizeof(RayPacket<4>) == 32 * 4 + 64, "RayPacket<4>: 128 B lanes + 64 B mask line");
+static_assert(sizeof(RayPacket<8>) == 32 * 8 + 64, "RayPacket<8>: 256 B lanes + 64 B mask line");
+static_assert(sizeof(RayPacket<16>) == 32 * 16 + 64, "RayPacket<16>: 512 B lanes + 64 B mask line");
+
+/// Closest-hit answers of K rays in SoA form, 64-byte aligned. A lane with no hit yet
+/// has t = +inf, prim = kInvalidPrim (see reset). Kernels write only lanes that hit
+/// something nearer than the lane's current t.
+template <int K>
+struct alignas(64) HitPacket {
+  static_assert(K == 4 || K == 8 || K == 16, "K rays per packet: 4, 8 or 16");
+  float t[K];               // 4K bytes
+  float u[K];               // 4K bytes
+  float v[K];               // 4K bytes
+  std::uint32_t prim[K];    // 4K bytes
+};
+static_assert(sizeof(HitPacket<4>) == 64, "HitPacket<4>: 16 B per lane");
+static_assert(sizeof(HitPacket<8>) == 128, "HitPacket<8>: 16 B per lane");
+static_assert(sizeof(HitPacket<16>) == 256, "HitPacket<16>: 16 B per lane");
+
+/// Bits of the first `count` lanes (count in [0, 32]).
+constexpr std::uint32_t lane_bits(int count) {
+  return count >= 32 ? ~0u : (1u << count) - 1u;
+}
+
+/// Makes lane i of `packet` inert and inactive.
+template <int K>
+void make_inert(RayPacket<K>& packet, int i) {
+  packet.ox[i] = packet.oy[i] = packet.oz[i] = 0.0f;
+  packet.dx[i] = packet.dy[i] = packet.dz[i] = 0.0f;
+  packet.tmin[i] = 0.0f;
+  packet.tmax[i] = -std::numeric_limits<float>::infinity();
+  packet.active &= ~(1u << i);
+}
+
+/// Loads rays[0 .. count) into lanes 0 .. count (0 <= count <= K); lanes count .. K are
+/// made inert. All loaded lanes are active, NaN/Inf rays included (kernels never report
+/// a hit for them).
+template <int K>
+void load(RayPacket<K>& packet, const Ray* rays, int count) {
+  packet.active = 0;
+  for (int i = 0; i < K; ++i) {
+    if (i >= count) {
+      make_inert(packet, i);
+      continue;
+    }
+    const Ray& r = rays[i];
+    packet.ox[i] = r.org[0], packet.oy[i] = r.org[1], packet.oz[i] = r.org[2];
+    packet.dx[i] = r.dir[0], packet.dy[i] = r.dir[1], packet.dz[i] = r.dir[2];
+    packet.tmin[i] = r.tmin;
+    packet.tmax[i] = r.tmax;
+    packet.active |= 1u << i;
+  }
+}
+
+/// Lane i of a packet as an AoS ray.
+template <int K>
+Ray ray_of(const RayPacket<K>& packet, int i) {
+  return Ray{{packet.ox[i], packet.oy[i], packet.oz[i]}, packet.tmin[i],
+             {packet.dx[i], packet.dy[i], packet.dz[i]}, packet.tmax[i]};
+}
+
+/// Sets every lane to "no hit yet": t = +inf, u = v = 0, prim = kInvalidPrim.
+template <int K>
+void reset(HitPacket<K>& hits) {
+  for (int i = 0; i < K; ++i) {
+    hits.t[i] = std::numeric_limits<float>::infinity();
+    hits.u[i] = hits.v[i] = 0.0f;
+    hits.prim[i] = kInvalidPrim;
+  }
+}
+
+/// Lane i of a hit packet as an AoS hit.
+template <int K>
+Hit hit_of(const HitPacket<K>& hits, int i) {
+  return Hit{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
+}
+
+/// Stores lanes 0 .. count of `hits` to out[0 .. count).
+template <int K>
+void store(const HitPacket<K>& hits, Hit* out, int count) {
+  for (int i = 0; i < count && i < K; ++i) out[i] = hit_of(hits, i);
+}
+
+}  // namespace volley

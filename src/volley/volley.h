@@ -1,0 +1,314 @@
+/* volley public C API (C99; also valid C++): build a scene of triangles and planar
+ * polygons, commit it, then ask for closest hits and occlusion of single rays, SoA ray
+ * packets of 4, 8 or 16 lanes, and ray streams. For C programs and for foreign-function
+ * interfaces (Python ctypes/cffi, Rust, Julia, ...); C++ programs may use it or the C++
+ * API in volley/accel.h, which it wraps (same kernels, same answers).
+ *
+ * Conventions, for every function below:
+ * - Every function that can fail returns a volley_status; VOLLEY_OK (0) is success.
+ *   On failure a message naming the function and the problem is kept for the calling
+ *   thread: volley_last_error(). No C++ exception ever leaves the library.
+ * - A call rejected for its input changes nothing: the scene is left as it was and output
+ *   arguments are not written. After VOLLEY_ERROR_OUT_OF_MEMORY or VOLLEY_ERROR_INTERNAL
+ *   the scene may hold part of the call's work: destroy it.
+ * - Thread safety: one thread at a time may create, add to, commit or destroy a scene.
+ *   Once committed, a scene is read-only; any number of threads may query it at once
+ *   (intersect / occluded / info), as long as nobody adds to, commits or destroys it.
+ * - Rays: r(t) = org + t * dir over tmin <= t < tmax. dir need not be normalized; t is in
+ *   units of |dir|. A ray with a non-finite origin or direction component, a NaN tmin or
+ *   tmax, tmin >= tmax, or a zero direction (dx = dy = dz = 0) is answered as a miss
+ *   (never hit, never occluded); this is not an error. volley_validate_rays reports such
+ *   rays for callers who want to know.
+ * - Primitive ids: every triangle and polygon gets the next id in order of addition,
+ *   starting at 0; a hit reports it in `prim`, a miss VOLLEY_INVALID_PRIM. */
+#ifndef VOLLEY_VOLLEY_H
+#define VOLLEY_VOLLEY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "volley/export.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Version of these headers (and of the library they came with): major.minor.patch.
+ *  volley_version() returns the version of the library actually loaded. */
+#define VOLLEY_VERSION_MAJOR 0
+#define VOLLEY_VERSION_MINOR 1   /**< see VOLLEY_VERSION_MAJOR */
+#define VOLLEY_VERSION_PATCH 0   /**< see VOLLEY_VERSION_MAJOR */
+
+/** prim of a miss (and of hit-packet lanes with no hit yet). */
+#define VOLLEY_INVALID_PRIM 0xffffffffu
+
+/** Alignment of the packet structs below: 64 bytes (one cache line, any SIMD width).
+ *  Stack variables of those types get it from the compiler; heap memory must come from
+ *  aligned_alloc(64, ...) or posix_memalign. Packets at other addresses are rejected
+ *  with VOLLEY_ERROR_MISALIGNED. */
+#if defined(__cplusplus)
+#define VOLLEY_ALIGN64 alignas(64)
+#elif defined(__GNUC__) || defined(__clang__)
+#define VOLLEY_ALIGN64 __attribute__((aligned(64)))
+#else
+#define VOLLEY_ALIGN64
+#endif
+
+/** Result of every fallible call. */
+typedef enum volley_status {
+  VOLLEY_OK = 0,                     /**< success */
+  VOLLEY_ERROR_INVALID_ARGUMENT = 1, /**< a NULL pointer, an unknown enum value, a count out of range */
+  VOLLEY_ERROR_INVALID_GEOMETRY = 2, /**< a non-finite vertex, an index out of range, a bad polygon */
+  VOLLEY_ERROR_MISALIGNED = 3,       /**< packet memory not 64-byte aligned */
+  VOLLEY_ERROR_NOT_COMMITTED = 4,    /**< a query on a scene not committed since its last change */
+  VOLLEY_ERROR_UNSUPPORTED_ISA = 5,  /**< this CPU cannot run the requested ISA (or VOLLEY_ISA is bad) */
+  VOLLEY_ERROR_OUT_OF_MEMORY = 6,    /**< an allocation failed */
+  VOLLEY_ERROR_INVALID_RAY = 7,      /**< from volley_validate_rays only: a ray that can never hit */
+  VOLLEY_ERROR_INTERNAL = 8          /**< anything else: a bug in volley, please report it */
+} volley_status;
+
+/** Ray/triangle test, fixed at commit (same as volley::TriangleTest). */
+typedef enum volley_triangle_test {
+  VOLLEY_TEST_WATERTIGHT = 0, /**< Woop-Benthin-Wald 2013: no cracks at shared edges (default) */
+  VOLLEY_TEST_PLANE = 1,      /**< the course notes' algorithm 1: ray/plane, then edge planes */
+  VOLLEY_TEST_MOLLER = 2      /**< the notes' algorithm 2: Cramer's rule (Moller-Trumbore) */
+} volley_triangle_test;
+
+/** Instruction set of the kernels, fixed at commit (same as volley::Isa). */
+typedef enum volley_isa {
+  VOLLEY_ISA_AUTO = 0,   /**< the widest the CPU supports, unless the VOLLEY_ISA variable names one */
+  VOLLEY_ISA_SCALAR = 1, /**< the scalar oracle */
+  VOLLEY_ISA_SSE42 = 2,  /**< SSE4.2, 4 lanes */
+  VOLLEY_ISA_AVX2 = 3,   /**< AVX2 + FMA, 8 lanes */
+  VOLLEY_ISA_AVX512 = 4  /**< AVX-512 F/DQ/BW/VL, 16 lanes */
+} volley_isa;
+
+/** One ray (32 bytes; the layout of volley::Ray and of a .vray record). */
+typedef struct volley_ray {
+  float org[3]; /**< origin */
+  float tmin;   /**< start of the search interval (inclusive) */
+  float dir[3]; /**< direction, not necessarily normalized */
+  float tmax;   /**< end of the search interval (exclusive) */
+} volley_ray;
+
+/** A closest-hit answer (16 bytes; the layout of volley::Hit and of a .vhit record).
+ *  The hit point is org + t * dir = (1 - u - v) p0 + u p1 + v p2 for the triangle's
+ *  vertices p0, p1, p2 in the order of its indices. Polygons report u = v = 0. */
+typedef struct volley_hit {
+  float t;       /**< distance along the ray in units of |dir|; +inf for a miss */
+  float u;       /**< barycentric weight of the second vertex; 0 for a miss */
+  float v;       /**< barycentric weight of the third vertex; 0 for a miss */
+  uint32_t prim; /**< id of the primitive hit; VOLLEY_INVALID_PRIM for a miss */
+} volley_hit;
+
+/** 4 rays in structure-of-arrays form (192 bytes, 64-byte aligned; the layout of
+ *  volley::RayPacket<4>). Lane i takes part when bit i of `active` is set; the other
+ *  lanes are ignored (never read for answers, never written). */
+typedef struct VOLLEY_ALIGN64 volley_ray_packet4 {
+  float ox[4], oy[4], oz[4];  /**< origins */
+  float dx[4], dy[4], dz[4];  /**< directions */
+  float tmin[4], tmax[4];     /**< search intervals tmin <= t < tmax */
+  uint32_t active;            /**< bit i set: lane i takes part */
+  uint32_t reserved[15];      /**< padding to the next 64 bytes; not read */
+} volley_ray_packet4;
+
+/** 8 rays in structure-of-arrays form (320 bytes; volley::RayPacket<8>). As volley_ray_packet4. */
+typedef struct VOLLEY_ALIGN64 volley_ray_packet8 {
+  float ox[8], oy[8], oz[8];  /**< origins */
+  float dx[8], dy[8], dz[8];  /**< directions */
+  float tmin[8], tmax[8];     /**< search intervals tmin <= t < tmax */
+  uint32_t active;            /**< bit i set: lane i takes part */
+  uint32_t reserved[15];      /**< padding to the next 64 bytes; not read */
+} volley_ray_packet8;
+
+/** 16 rays in structure-of-arrays form (576 bytes; volley::RayPacket<16>). As volley_ray_packet4. */
+typedef struct VOLLEY_ALIGN64 volley_ray_packet16 {
+  float ox[16], oy[16], oz[16]; /**< origins */
+  float dx[16], dy[16], dz[16]; /**< directions */
+  float tmin[16], tmax[16];     /**< search intervals tmin <= t < tmax */
+  uint32_t active;              /**< bit i set: lane i takes part */
+  uint32_t reserved[15];        /**< padding to the next 64 bytes; not read */
+} volley_ray_packet16;
+
+/** Closest hits of 4 rays (64 bytes, 64-byte aligned; volley::HitPacket<4>). Lane i
+ *  means what volley_hit means; before a query, reset it (volley_reset_hits4) or leave an
+ *  earlier answer there to bound the search. */
+typedef struct VOLLEY_ALIGN64 volley_hit_packet4 {
+  float t[4];       /**< distances; +inf: no hit */
+  float u[4];       /**< barycentric u */
+  float v[4];       /**< barycentric v */
+  uint32_t prim[4]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+} volley_hit_packet4;
+
+/** Closest hits of 8 rays (128 bytes; volley::HitPacket<8>). As volley_hit_packet4. */
+typedef struct VOLLEY_ALIGN64 volley_hit_packet8 {
+  float t[8];       /**< distances; +inf: no hit */
+  float u[8];       /**< barycentric u */
+  float v[8];       /**< barycentric v */
+  uint32_t prim[8]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+} volley_hit_packet8;
+
+/** Closest hits of 16 rays (256 bytes; volley::HitPacket<16>). As volley_hit_packet4. */
+typedef struct VOLLEY_ALIGN64 volley_hit_packet16 {
+  float t[16];       /**< distances; +inf: no hit */
+  float u[16];       /**< barycentric u */
+  float v[16];       /**< barycentric v */
+  uint32_t prim[16]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+} volley_hit_packet16;
+
+/** Facts about a committed scene (a subset of volley::AccelInfo). */
+typedef struct volley_scene_info {
+  size_t triangles;          /**< triangles added */
+  size_t degenerate;         /**< zero-area triangles among them (never hit) */
+  size_t polygons;           /**< polygons added */
+  size_t nodes;              /**< BVH nodes */
+  size_t leaves;             /**< BVH leaves */
+  size_t depth;              /**< deepest leaf (root = 0) */
+  size_t bytes;              /**< memory of the BVH and primitive data */
+  double build_seconds;      /**< wall time of the last commit */
+  int width;                 /**< children per node of the triangle BVH */
+  int block_width;           /**< triangles per leaf block (SIMD lanes) */
+  volley_triangle_test test; /**< the test in use */
+  volley_isa isa;            /**< the ISA in use (never VOLLEY_ISA_AUTO) */
+} volley_scene_info;
+
+/** A scene: triangles and polygons plus the acceleration structure built over them.
+ *  Opaque; create with volley_scene_create, free with volley_scene_destroy. */
+typedef struct volley_scene volley_scene;
+
+/** The library's version, "major.minor.patch". Static storage; never fails. */
+VOLLEY_API const char* volley_version(void);
+
+/** The message of the most recent failing call made by this thread ("" when none has
+ *  failed). The pointer stays valid until this thread's next failing call; a successful
+ *  call leaves the message as it was (as errno does). */
+VOLLEY_API const char* volley_last_error(void);
+
+/** The name of a status ("VOLLEY_ERROR_MISALIGNED", ...); "unknown status" for a value
+ *  outside the enum. Static storage; never fails. */
+VOLLEY_API const char* volley_status_string(volley_status status);
+
+/** 1 when this CPU (and OS) can run `isa`, else 0. VOLLEY_ISA_AUTO and VOLLEY_ISA_SCALAR
+ *  are always supported; a value outside the enum is not. */
+VOLLEY_API int volley_isa_supported(volley_isa isa);
+
+/** Creates an empty scene in *out (the caller owns it: volley_scene_destroy).
+ *  VOLLEY_ERROR_INVALID_ARGUMENT when out is NULL. */
+VOLLEY_API volley_status volley_scene_create(volley_scene** out);
+
+/** Frees a scene and everything it holds. NULL is allowed (nothing happens). No query on
+ *  the scene may be running. */
+VOLLEY_API void volley_scene_destroy(volley_scene* scene);
+
+/** Adds an indexed triangle mesh and copies it: the caller may free or reuse `xyz` and
+ *  `indices` as soon as the call returns. `xyz` holds 3 * vertex_count floats (x, y, z
+ *  of each vertex), `indices` 3 * triangle_count vertex indices (0-based). The triangles
+ *  get consecutive prim ids; the first is stored in *first_prim when first_prim is not
+ *  NULL. Zero-area triangles are accepted and never hit. The scene must be committed
+ *  again before the next query.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene, a NULL array with a non-zero
+ *  count, or more primitives than prim ids (2^32 - 1 in all);
+ *  VOLLEY_ERROR_INVALID_GEOMETRY for a NaN or infinite coordinate (of any vertex, used
+ *  or not) or an index >= vertex_count. Nothing is added on error. */
+VOLLEY_API volley_status volley_scene_add_triangles(volley_scene* scene, const float* xyz, size_t vertex_count,
+                                                    const uint32_t* indices, size_t triangle_count,
+                                                    uint32_t* first_prim);
+
+/** Adds one planar polygon (convex or concave, vertex_count >= 3 vertices in order around
+ *  its boundary, 3 * vertex_count floats) and copies it. Its prim id is stored in *prim
+ *  when prim is not NULL. Hits on polygons report u = v = 0.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or xyz, or too many
+ *  primitives; VOLLEY_ERROR_INVALID_GEOMETRY for fewer than 3 vertices, a non-finite
+ *  coordinate, a polygon that is not planar (within 1e-4 of its size) or has zero area.
+ *  Nothing is added on error. */
+VOLLEY_API volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, size_t vertex_count,
+                                                  uint32_t* prim);
+
+/** Builds the acceleration structure with the given test and ISA (VOLLEY_TEST_WATERTIGHT
+ *  and VOLLEY_ISA_AUTO are the defaults of volley trace and volley render). May be called
+ *  again after adding more geometry; an empty scene commits (and every ray misses).
+ *  Uses oneTBB worker threads.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an enum value out of range;
+ *  VOLLEY_ERROR_UNSUPPORTED_ISA when this CPU lacks `isa` (or, for VOLLEY_ISA_AUTO, when
+ *  the VOLLEY_ISA environment variable names a bad or unsupported ISA); the scene is
+ *  then unchanged (and still committed if it was). */
+VOLLEY_API volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa);
+
+/** Facts about the committed scene, stored in *info.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info* info);
+
+/** Closest hit of one ray, stored in *hit (a miss when nothing is hit; see the ray
+ *  conventions above).
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_intersect1(const volley_scene* scene, const volley_ray* ray, volley_hit* hit);
+
+/** Occlusion of one ray: *occluded = 1 when anything lies at tmin <= t < tmax, else 0.
+ *  Errors: as volley_intersect1. */
+VOLLEY_API volley_status volley_occluded1(const volley_scene* scene, const volley_ray* ray, int* occluded);
+
+/** Closest hits of the active lanes of a packet of 4. Lane i searches
+ *  tmin <= t < min(tmax, hits->t[i]) and writes lane i of *hits only when it finds a
+ *  nearer hit: reset the hits first (volley_reset_hits4), or keep earlier answers to
+ *  bound the search. Inactive lanes of *hits are never written. Same answers as
+ *  volley_intersect1 per lane.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_MISALIGNED (rays
+ *  or hits not 64-byte aligned), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_intersect4(const volley_scene* scene, const volley_ray_packet4* rays,
+                                           volley_hit_packet4* hits);
+/** As volley_intersect4 for 8 lanes. */
+VOLLEY_API volley_status volley_intersect8(const volley_scene* scene, const volley_ray_packet8* rays,
+                                           volley_hit_packet8* hits);
+/** As volley_intersect4 for 16 lanes. */
+VOLLEY_API volley_status volley_intersect16(const volley_scene* scene, const volley_ray_packet16* rays,
+                                            volley_hit_packet16* hits);
+
+/** Occlusion of the active lanes of a packet of 4: *occluded gets bit i set when lane i
+ *  is active and blocked (tmin <= t < tmax); other bits are 0.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_MISALIGNED (rays
+ *  not 64-byte aligned), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_occluded4(const volley_scene* scene, const volley_ray_packet4* rays,
+                                          uint32_t* occluded);
+/** As volley_occluded4 for 8 lanes. */
+VOLLEY_API volley_status volley_occluded8(const volley_scene* scene, const volley_ray_packet8* rays,
+                                          uint32_t* occluded);
+/** As volley_occluded4 for 16 lanes. */
+VOLLEY_API volley_status volley_occluded16(const volley_scene* scene, const volley_ray_packet16* rays,
+                                           uint32_t* occluded);
+
+/** Sets every lane of *hits to "no hit yet" (t = +inf, u = v = 0, prim =
+ *  VOLLEY_INVALID_PRIM). Needs no alignment; does nothing for NULL. */
+VOLLEY_API void volley_reset_hits4(volley_hit_packet4* hits);
+/** As volley_reset_hits4 for 8 lanes. */
+VOLLEY_API void volley_reset_hits8(volley_hit_packet8* hits);
+/** As volley_reset_hits4 for 16 lanes. */
+VOLLEY_API void volley_reset_hits16(volley_hit_packet16* hits);
+
+/** Closest hits of `count` rays: hits[i] answers rays[i]; every entry is written (a miss
+ *  where nothing is hit). The library regroups coherent runs of rays into packets; the
+ *  answers equal volley_intersect1 per ray. No alignment needed. count = 0 does nothing
+ *  (and the arrays may then be NULL). Should a call fail after it started tracing (out
+ *  of memory), hits may be partly written.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_NOT_COMMITTED,
+ *  VOLLEY_ERROR_OUT_OF_MEMORY. */
+VOLLEY_API volley_status volley_intersect_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
+                                                 volley_hit* hits);
+
+/** Occlusion of `count` rays: occluded[i] = 1 when rays[i] is blocked, else 0. As
+ *  volley_intersect_stream otherwise. */
+VOLLEY_API volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
+                                                uint8_t* occluded);
+
+/** Checks rays without tracing them: VOLLEY_OK when every ray can hit something;
+ *  VOLLEY_ERROR_INVALID_RAY for the first ray that is always a miss (non-finite origin or
+ *  direction, NaN tmin or tmax, tmin >= tmax, zero direction), whose index goes to
+ *  *first_invalid when first_invalid is not NULL, with a message naming the ray and the
+ *  reason. VOLLEY_ERROR_INVALID_ARGUMENT for rays = NULL with count > 0. Not needed
+ *  before a query (such rays simply miss); for callers who treat them as bugs. */
+VOLLEY_API volley_status volley_validate_rays(const volley_ray* rays, size_t count, size_t* first_invalid);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* VOLLEY_VOLLEY_H */

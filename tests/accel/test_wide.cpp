@@ -1,0 +1,533 @@
+// The wide BVH and its traversals (single ray, packets of 4, 8, 16, streams), on every ISA
+// this CPU has and every triangle test, against brute force over the scalar oracle, ray by
+// ray: same prim, or the same t where two triangles tie.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "accel/wide_accel.h"
+#include "core/bvh.h"
+#include "core/triangle.h"
+#include "io/obj_loader.h"
+#include "io/scene_desc.h"
+#include "simd/dispatch.h"
+#include "volley/accel.h"
+#include "volley/packet.h"
+
+using volley::Accel;
+using volley::Hit;
+using volley::Isa;
+using volley::Ray;
+using volley::TriangleTest;
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+const TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};
+
+/// The SIMD ISAs this CPU runs (a message names the others).
+std::vector<Isa> simd_isas() {
+  std::vector<Isa> out;
+  for (Isa isa : {Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (volley::simd::cpu_has(isa))
+      out.push_back(isa);
+    else
+      MESSAGE("skipped: this CPU lacks " << std::string(volley::to_string(isa)));
+  }
+  return out;
+}
+
+/// Triangles as packed xyz (9 floats each), with an indexed form for Accel.
+struct Soup {
+  std::vector<float> xyz;
+  void add(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    xyz.insert(xyz.end(), {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z});
+  }
+  std::size_t size() const { return xyz.size() / 9; }
+  glm::vec3 vertex(std::size_t i, int k) const {
+    return {xyz[9 * i + 3 * k], xyz[9 * i + 3 * k + 1], xyz[9 * i + 3 * k + 2]};
+  }
+  Accel accel(TriangleTest test, Isa isa) const {
+    Accel a;
+    std::vector<std::uint32_t> idx(3 * size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
+    a.add_triangles(xyz.data(), 3 * size(), idx.data(), size());
+    a.commit({test, isa});
+    return a;
+  }
+  std::vector<volley::core::BBox> boxes() const {
+    std::vector<volley::core::BBox> out(size());
+    for (std::size_t i = 0; i < size(); ++i) {
+      if (volley::core::is_degenerate(vertex(i, 0), vertex(i, 1), vertex(i, 2))) continue;
+      for (int k = 0; k < 3; ++k) out[i].extend(vertex(i, k));
+    }
+    return out;
+  }
+};
+
+Ray make_ray(glm::vec3 o, glm::vec3 d, float tmin = 0.0f, float tmax = kInf) {
+  return Ray{{o.x, o.y, o.z}, tmin, {d.x, d.y, d.z}, tmax};
+}
+
+bool finite_ray(const Ray& r) {
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(r.org[a]) || !std::isfinite(r.dir[a])) return false;
+  return !std::isnan(r.tmin) && !std::isnan(r.tmax);
+}
+
+/// Closest hit by brute force with the scalar oracle (the oracle's loop: a triangle
+/// replaces the hit when t < the current bound). Rays the API rejects miss.
+Hit brute_force(const Soup& soup, TriangleTest test, const Ray& ray) {
+  Hit best;
+  if (!finite_ray(ray)) return best;
+  const glm::vec3 o(ray.org[0], ray.org[1], ray.org[2]), d(ray.dir[0], ray.dir[1], ray.dir[2]);
+  float upper = ray.tmax;
+  for (std::size_t i = 0; i < soup.size(); ++i) {
+    volley::core::TriHit<float> h;
+    if (volley::core::intersect_triangle(test, volley::core::RayT<float>{o, ray.tmin, d, upper}, soup.vertex(i, 0),
+                                         soup.vertex(i, 1), soup.vertex(i, 2), h)) {
+      upper = h.t;
+      best = {h.t, h.u, h.v, static_cast<std::uint32_t>(i)};
+    }
+  }
+  return best;
+}
+
+/// Same answer: the same prim, or both hits at the same t (a tie between triangles).
+bool agree(const Hit& got, const Hit& want) {
+  return got.prim == want.prim ? (!got.hit() || got.t == want.t) : (got.hit() && want.hit() && got.t == want.t);
+}
+
+/// Counts disagreements of every query form of `accel` with `want` (per ray), and checks
+/// the packet contract: inactive lanes untouched, occlusion masks within the active lanes.
+struct FormCheck {
+  std::size_t single = 0, occluded = 0, packet = 0, packet_occluded = 0, stream = 0, stream_occluded = 0;
+  std::size_t inactive_written = 0, lanes = 0;
+  std::size_t total() const {
+    return single + occluded + packet + packet_occluded + stream + stream_occluded + inactive_written;
+  }
+};
+
+template <int K>
+void check_packets(const Accel& accel, const std::vector<Ray>& rays, const std::vector<Hit>& want, std::mt19937& rng,
+                   FormCheck& f) {
+  volley::RayPacket<K> p;
+  volley::HitPacket<K> h;
+  for (std::size_t first = 0; first < rays.size(); first += K) {
+    // Full packets mostly; partial ones (1, K - 1 lanes) and random inactive lanes too.
+    int count = static_cast<int>(std::min<std::size_t>(K, rays.size() - first));
+    const int shape = static_cast<int>(rng() % 8);
+    if (shape == 0) count = 1;
+    if (shape == 1 && count > 1) count = K - 1 < count ? K - 1 : count;
+    volley::load(p, rays.data() + first, count);
+    if (shape == 2) p.active &= static_cast<std::uint32_t>(rng()) | 1u;
+    // Inactive lanes hold a sentinel that must survive.
+    volley::reset(h);
+    for (int i = 0; i < K; ++i)
+      if (!((p.active >> i) & 1u)) h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
+    accel.intersect(p, h);
+    const std::uint32_t mask = accel.occluded(p);
+    for (int i = 0; i < K; ++i) {
+      if (!((p.active >> i) & 1u)) {
+        f.inactive_written += h.t[i] != 12345.0f || h.prim[i] != 0xdeadbeefu || ((mask >> i) & 1u);
+        continue;
+      }
+      ++f.lanes;
+      const Hit& w = want[first + static_cast<std::size_t>(i)];
+      f.packet += !agree(volley::hit_of(h, i), w);
+      f.packet_occluded += ((mask >> i) & 1u) != (w.hit() ? 1u : 0u);
+    }
+  }
+}
+
+FormCheck check_forms(const Accel& accel, const std::vector<Ray>& rays, const std::vector<Hit>& want,
+                      std::uint32_t seed) {
+  FormCheck f;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    f.single += !agree(accel.intersect(rays[i]), want[i]);
+    f.occluded += accel.occluded(rays[i]) != want[i].hit();
+  }
+  std::mt19937 rng(seed);
+  check_packets<4>(accel, rays, want, rng, f);
+  check_packets<8>(accel, rays, want, rng, f);
+  check_packets<16>(accel, rays, want, rng, f);
+  // Streams of odd lengths, at odd offsets.
+  std::vector<Hit> hits(rays.size());
+  std::vector<std::uint8_t> blocked(rays.size(), 7);
+  for (std::size_t first = 0; first < rays.size();) {
+    const std::size_t n = std::min<std::size_t>(rays.size() - first, 1 + rng() % 70);
+    accel.intersect(rays.data() + first, n, hits.data() + first);
+    accel.occluded(rays.data() + first, n, blocked.data() + first);
+    first += n;
+  }
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    f.stream += !agree(hits[i], want[i]);
+    f.stream_occluded += blocked[i] != (want[i].hit() ? 1 : 0);
+  }
+  return f;
+}
+
+void report(const FormCheck& f, const std::string& what) {
+  CAPTURE(what);
+  CHECK(f.single == 0);
+  CHECK(f.occluded == 0);
+  CHECK(f.packet == 0);
+  CHECK(f.packet_occluded == 0);
+  CHECK(f.stream == 0);
+  CHECK(f.stream_occluded == 0);
+  CHECK(f.inactive_written == 0);
+}
+
+/// Random soup of n small triangles in [-10, 10]^3.
+Soup random_soup(int n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-10.0f, 10.0f), small(-1.0f, 1.0f);
+  Soup soup;
+  for (int i = 0; i < n; ++i) {
+    const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+    soup.add(c + glm::vec3(small(rng), small(rng), small(rng)), c + glm::vec3(small(rng), small(rng), small(rng)),
+             c + glm::vec3(small(rng), small(rng), small(rng)));
+  }
+  return soup;
+}
+
+/// Rays of every kind the traversals distinguish, in runs of 16: incoherent (mixed
+/// octants: the per-lane packet walk), pinhole 4x4 blocks (one octant: the frustum walk),
+/// axis-aligned blocks (zero components: the per-lane one-octant walk), converging
+/// shadow-like rays with a finite tmax, and runs with NaN / Inf lanes among good ones.
+std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-extent, extent), unit(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (int r = 0; r < runs; ++r) {
+    const int kind = r % 5;
+    const glm::vec3 eye(pos(rng) * 2.0f, pos(rng) * 2.0f, pos(rng) * 2.0f);
+    const glm::vec3 look = glm::vec3(pos(rng), pos(rng), pos(rng)) * 0.5f - eye;
+    const glm::vec3 u = glm::normalize(glm::cross(look, glm::vec3(0.3f, 1.0f, 0.1f))) * 0.02f * extent;
+    const glm::vec3 v = glm::normalize(glm::cross(u, look)) * 0.02f * extent;
+    for (int i = 0; i < 16; ++i) {
+      const float x = float(i % 4) - 1.5f, y = float(i / 4) - 1.5f;
+      switch (kind) {
+        case 0:
+          rays.push_back(make_ray(eye, glm::vec3(pos(rng), pos(rng), pos(rng)) - eye));
+          break;
+        case 1:
+          rays.push_back(make_ray(eye, look + x * u + y * v));
+          break;
+        case 2: {
+          const int axis = r / 5 % 3;
+          glm::vec3 d(0.0f);
+          d[axis] = (r / 15) % 2 ? 1.0f : -1.0f;
+          glm::vec3 o(pos(rng), pos(rng), pos(rng));
+          o[axis] = -d[axis] * extent * 2.0f;
+          rays.push_back(make_ray(o, d));
+          break;
+        }
+        case 3: {
+          // From points near the packet's own "surface" toward one light, interval [0, 1).
+          const glm::vec3 o = eye * 0.25f + x * u * 5.0f + y * v * 5.0f;
+          rays.push_back(make_ray(o, look * 1.5f + glm::vec3(0, 0.1f * x, 0), 0.0f, 1.0f));
+          break;
+        }
+        default: {
+          Ray ray = make_ray(eye, look + x * u + y * v);
+          if (i == 3) ray.dir[1] = kNaN;
+          if (i == 7) ray.org[0] = kInf;
+          if (i == 11) ray.tmax = kNaN;
+          if (i == 12) ray.dir[2] = -kInf;
+          if (i == 13) ray.tmin = 2.0f, ray.tmax = 1.0f;  // empty interval
+          rays.push_back(ray);
+          break;
+        }
+      }
+    }
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("wide: every query form equals brute force on random soups (every ISA, test, K)") {
+  const Soup soup = random_soup(1500, 11);
+  const std::vector<Ray> rays = mixed_rays(120, 10.0f, 5);
+  for (TriangleTest test : kTests) {
+    std::vector<Hit> want(rays.size());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) hits += (want[i] = brute_force(soup, test, rays[i])).hit();
+    // The generator produces hits and misses.
+    CHECK(hits > rays.size() / 5);
+    CHECK(hits < rays.size() * 4 / 5);
+    for (Isa isa : simd_isas()) {
+      const Accel accel = soup.accel(test, isa);
+      report(check_forms(accel, rays, want, 3), std::string(volley::to_string(test)) + " " +
+                                                    std::string(volley::to_string(isa)));
+    }
+    // The scalar oracle's own packet and stream forms.
+    report(check_forms(soup.accel(test, Isa::scalar), rays, want, 4),
+           std::string(volley::to_string(test)) + " scalar");
+  }
+}
+
+TEST_CASE("wide: NaN and Inf lanes miss without disturbing the other lanes of their packet") {
+  const Soup soup = random_soup(300, 2);
+  std::vector<Ray> rays = mixed_rays(10, 10.0f, 9);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const Accel accel = soup.accel(TriangleTest::watertight, isa);
+    volley::RayPacket<16> clean, dirty;
+    volley::HitPacket<16> h_clean, h_dirty;
+    for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+      volley::load(clean, rays.data() + first, 16);
+      dirty = clean;
+      for (int i = 0; i < 16; i += 3) {  // poison every third lane in a different way
+        if (i % 2) dirty.dx[i] = kNaN; else dirty.oy[i] = -kInf;
+      }
+      volley::reset(h_clean);
+      volley::reset(h_dirty);
+      accel.intersect(clean, h_clean);
+      accel.intersect(dirty, h_dirty);
+      const std::uint32_t m_clean = accel.occluded(clean), m_dirty = accel.occluded(dirty);
+      for (int i = 0; i < 16; ++i) {
+        if (i % 3 == 0) {
+          CHECK(!volley::hit_of(h_dirty, i).hit());
+          CHECK(((m_dirty >> i) & 1u) == 0u);
+        } else {
+          CHECK(agree(volley::hit_of(h_dirty, i), volley::hit_of(h_clean, i)));
+          CHECK(((m_dirty >> i) & 1u) == ((m_clean >> i) & 1u));
+        }
+        CHECK(!std::isnan(h_dirty.t[i]));
+      }
+    }
+  }
+}
+
+TEST_CASE("wide: flat axis-aligned geometry, origins on slab planes, zero direction components (stress 4)") {
+  // A floor of unit quads at z = 0 (flat boxes) and walls in the planes x = 4, 8 and y = 4, 8;
+  // axis-aligned rays (other components ±0) from integer and half-integer coordinates run
+  // exactly in slab planes, where 0 * inf = NaN must keep the node.
+  constexpr int G = 12;
+  Soup soup;
+  auto quad = [&](glm::vec3 p, glm::vec3 e1, glm::vec3 e2) {
+    soup.add(p, p + e1, p + e1 + e2);
+    soup.add(p, p + e1 + e2, p + e2);
+  };
+  for (int i = 0; i < G; ++i)
+    for (int j = 0; j < G; ++j) quad({float(i), float(j), 0}, {1, 0, 0}, {0, 1, 0});
+  for (int w = 4; w < G; w += 4)
+    for (int j = 0; j < G; ++j)
+      for (int k = -2; k < 2; ++k) {
+        quad({float(w), float(j), float(k)}, {0, 1, 0}, {0, 0, 1});
+        quad({float(j), float(w), float(k)}, {1, 0, 0}, {0, 0, 1});
+      }
+  std::vector<Ray> rays;
+  for (float zero : {0.0f, -0.0f})
+    for (int a = 0; a <= 2 * G; ++a)
+      for (int b = -4; b <= 4; ++b) {
+        const float x = 0.5f * a, h = 0.5f * b;
+        rays.push_back(make_ray({x, 0.5f * (a / 2 + b + 4), 5}, {zero, zero, -1}));
+        rays.push_back(make_ray({x, x, 5}, {zero, zero, -2}));
+        rays.push_back(make_ray({-1, x, h}, {1, zero, zero}));
+        rays.push_back(make_ray({x, G + 1.0f, h}, {zero, -1, zero}));
+        rays.push_back(make_ray({x, 0.5f * (b + 4), 0}, {1, zero, zero}));
+      }
+  for (TriangleTest test : kTests) {
+    std::vector<Hit> want(rays.size());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) hits += (want[i] = brute_force(soup, test, rays[i])).hit();
+    CHECK(hits > rays.size() / 2);
+    for (Isa isa : simd_isas())
+      report(check_forms(soup.accel(test, isa), rays, want, 8),
+             std::string("grid ") + std::string(volley::to_string(test)) + " " + std::string(volley::to_string(isa)));
+  }
+}
+
+TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab padding (mutation check)") {
+  // Lone triangles, one per leaf, and rays from all around aimed exactly at their vertices:
+  // many rays only touch a leaf box at a corner or an edge, where entry = exit in exact
+  // arithmetic and rounding decides. The padded traversal must find every hit brute force
+  // finds; the unpadded variant (WideKernels<..., Robust = false>) must miss some, which
+  // shows this test can fail.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  Soup soup;
+  for (int i = 0; i < 400; ++i) {
+    const float scale = std::ldexp(1.0f, static_cast<int>(rng() % 12) - 6);
+    const glm::vec3 c = 40.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
+    soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)), c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
+             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)));
+  }
+  std::vector<Ray> rays;
+  for (std::size_t t = 0; t < soup.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      for (int r = 0; r < 12; ++r) {
+        const glm::vec3 target = soup.vertex(t, k);
+        const glm::vec3 o = target + 3.0f * glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f);
+        rays.push_back(make_ray(o, target - o));
+      }
+  const auto boxes = soup.boxes();
+  volley::core::BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  const volley::core::Bvh bvh = volley::core::build_bvh(boxes, one_per_leaf);
+  std::vector<std::uint32_t> ids(soup.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
+  std::vector<Hit> want(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) want[i] = brute_force(soup, TriangleTest::watertight, rays[i]);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    std::size_t missed[2] = {0, 0}, packet_missed[2] = {0, 0};
+    for (bool robust : {true, false}) {
+      const auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
+      wide->build(bvh, soup.xyz.data(), ids.data());
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        Hit h;
+        wide->intersect(rays[i], h);
+        missed[robust] += !agree(h, want[i]);
+      }
+      volley::RayPacket<16> p;
+      volley::HitPacket<16> h;
+      for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+        volley::load(p, rays.data() + first, 16);
+        volley::reset(h);
+        wide->intersect(p, h);
+        for (int i = 0; i < 16; ++i) packet_missed[robust] += !agree(volley::hit_of(h, i), want[first + i]);
+      }
+    }
+    MESSAGE(std::string(volley::to_string(isa)), ": ", rays.size(), " vertex-aimed rays; unpadded traversal wrong on ",
+            missed[0], " (single) and ", packet_missed[0], " (packets), padded on ", missed[1], " and ",
+            packet_missed[1]);
+    CHECK(missed[1] == 0);
+    CHECK(packet_missed[1] == 0);
+    CHECK(missed[0] > 0);
+  }
+}
+
+TEST_CASE("wide: shared meshes against the scalar oracle's traversal") {
+  const std::filesystem::path dir = VOLLEY_SHARED_SCENES;
+  for (const char* name : {"teapot.obj", "stanford-bunny.obj"}) {
+    const std::filesystem::path file = dir / name;
+    if (!std::filesystem::exists(file)) {
+      MESSAGE("skipped: " << file.string() << " not found");
+      continue;
+    }
+    volley::io::SceneDesc desc;
+    volley::io::load_obj(file, glm::mat4(1.0f), std::nullopt, desc);
+    const auto& m = desc.mesh;
+    std::vector<float> xyz;
+    for (const glm::vec3& p : m.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+    glm::vec3 lo(kInf), hi(-kInf);
+    for (const glm::vec3& p : m.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const glm::vec3 center = 0.5f * (lo + hi);
+    const float extent = 0.5f * glm::length(hi - lo);
+    std::vector<Ray> rays = mixed_rays(200, extent, 17);
+    for (Ray& r : rays)
+      for (int a = 0; a < 3; ++a) r.org[a] += center[a];
+    Accel oracle;
+    oracle.add_triangles(xyz.data(), m.positions.size(), m.indices.data(), m.triangle_count());
+    oracle.commit({TriangleTest::watertight, Isa::scalar});
+    std::vector<Hit> want(rays.size());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) hits += (want[i] = oracle.intersect(rays[i])).hit();
+    CHECK(hits > rays.size() / 10);
+    for (Isa isa : simd_isas()) {
+      Accel accel;
+      accel.add_triangles(xyz.data(), m.positions.size(), m.indices.data(), m.triangle_count());
+      accel.commit({TriangleTest::watertight, isa});
+      report(check_forms(accel, rays, want, 12), std::string(name) + " " + std::string(volley::to_string(isa)));
+    }
+  }
+}
+
+TEST_CASE("wide: AccelInfo describes the wide BVH") {
+  const Soup soup = random_soup(5000, 3);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const auto info = soup.accel(TriangleTest::watertight, isa).info();
+    CHECK(info.width == volley::simd::kWideN);
+    CHECK(info.block_width == (isa == Isa::avx512 ? 16 : isa == Isa::avx2 ? 8 : 4));
+    CHECK(info.blocks * std::size_t(info.block_width) >= info.triangles - info.degenerate);
+    CHECK(info.leaves > 0);
+    CHECK(info.nodes > 0);
+    CHECK(info.nodes < info.leaves);
+    CHECK(info.mean_children > 2.0);
+    CHECK(info.mean_children <= 8.0);
+    CHECK(info.block_fill > 0.0);
+    CHECK(info.block_fill <= 1.0);
+    CHECK(std::isfinite(info.sah_cost));
+    CHECK(info.sah_cost < info.binary_sah_cost);
+    CHECK(info.bytes >= info.nodes * sizeof(volley::simd::WideNode<8>));
+  }
+  const auto scalar = soup.accel(TriangleTest::watertight, Isa::scalar).info();
+  CHECK(scalar.width == 2);
+  CHECK(scalar.block_width == 1);
+  CHECK(scalar.sah_cost == scalar.binary_sah_cost);
+}
+
+TEST_CASE("wide: empty scenes, one triangle, degenerate-only scenes") {
+  const Ray down = make_ray({0.2f, 0.2f, 5}, {0, 0, -1});
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel empty;
+    empty.commit({TriangleTest::watertight, isa});
+    CHECK(!empty.intersect(down).hit());
+    volley::RayPacket<16> p;
+    volley::load(p, &down, 1);
+    volley::HitPacket<16> h;
+    volley::reset(h);
+    empty.intersect(p, h);
+    CHECK(!volley::hit_of(h, 0).hit());
+    CHECK(empty.occluded(p) == 0u);
+
+    Soup one;
+    one.add({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+    const Accel a = one.accel(TriangleTest::watertight, isa);
+    CHECK(a.intersect(down).prim == 0);
+    volley::reset(h);
+    a.intersect(p, h);
+    CHECK(h.prim[0] == 0);
+    CHECK(h.t[0] == doctest::Approx(5.0f));
+    CHECK(a.occluded(p) == 1u);
+
+    Soup flat;  // only zero-area triangles
+    flat.add({0, 0, 0}, {1, 0, 0}, {2, 0, 0});
+    flat.add({0, 0, 0}, {0, 0, 0}, {0, 1, 0});
+    const Accel d = flat.accel(TriangleTest::watertight, isa);
+    CHECK(d.info().degenerate == 2);
+    CHECK(!d.intersect(down).hit());
+    CHECK(!d.occluded(down));
+  }
+}
+
+TEST_CASE("wide: packets and streams see polygons as single rays do") {
+  // Two triangles at z = 5 and z = 3, a square polygon at z = 4 (prim ids 0, 1, 2).
+  const float tris[] = {-1, -1, 5, 1, -1, 5, 0, 1, 5, -1, -1, 3, 1, -1, 3, 0, 1, 3};
+  const std::uint32_t idx[] = {0, 1, 2, 3, 4, 5};
+  const float square[] = {-2, -2, 4, 2, -2, 4, 2, 2, 4, -2, 2, 4};
+  std::vector<Ray> rays;
+  for (int i = 0; i < 48; ++i) {
+    const float x = -2.5f + 0.11f * float(i), y = 0.05f * float(i % 7) - 0.1f;
+    rays.push_back(make_ray({x, y, 0}, {0, 0, 1}, i % 3 == 0 ? 3.5f : 0.0f));
+  }
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    CAPTURE(std::string(volley::to_string(isa)));
+    for (TriangleTest test : kTests) {
+      Accel accel;
+      accel.add_triangles(tris, 6, idx, 2);
+      accel.add_polygon(square, 4);
+      accel.commit({test, isa});
+      std::vector<Hit> want(rays.size());
+      std::size_t polygon_hits = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i) polygon_hits += (want[i] = accel.intersect(rays[i])).prim == 2;
+      CHECK(polygon_hits > 5);
+      report(check_forms(accel, rays, want, 13), std::string("polygons ") + std::string(volley::to_string(test)));
+    }
+  }
+}
