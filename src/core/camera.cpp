@@ -18,15 +18,16 @@ Camera Camera::look_at(const glm::vec3& eye, const glm::vec3& target, const glm:
                        float fov_deg, int width, int height) {
   glm::vec3 w = target - eye;
   if (!(glm::length(w) > 0.0f)) throw std::invalid_argument("camera: eye and look_at coincide");
+  const float f = 1e-3f * glm::length(w);
   w = glm::normalize(w);
   glm::vec3 u = glm::cross(w, up);
   if (!(glm::length(u) > 0.0f)) throw std::invalid_argument("camera: up is parallel to the view direction");
   u = glm::normalize(u);
   const glm::vec3 v = glm::cross(u, w);
   if (!(fov_deg > 0.0f && fov_deg < 180.0f)) throw std::invalid_argument("camera: fov must be in (0, 180) degrees");
-  const float half_h = std::tan(glm::radians(fov_deg) * 0.5f);
+  const float half_h = f * std::tan(glm::radians(fov_deg) * 0.5f);
   const float half_w = half_h * float(width) / float(height);
-  return Camera(eye, u, v, w, 1.0f, -half_w, half_w, half_h, -half_h, width, height);
+  return Camera(eye, u, v, w, f, -half_w, half_w, half_h, -half_h, width, height);
 }
 
 glm::vec3 Camera::pixel_point(float i, float j) const {

@@ -13,7 +13,9 @@ class Camera {
          float f, float wl, float wr, float wt, float wb, int width, int height);
 
   /// Look-at form on top of the notes' one: w = normalize(target - eye), u = w x up,
-  /// v = u x w, f = 1, window from the vertical field of view and the aspect ratio.
+  /// v = u x w, window from the vertical field of view and the aspect ratio. The image
+  /// plane (where the notes' rays start) sits at f = 1e-3 |target - eye|, so nothing
+  /// between the eye and the target is clipped whatever the scene's units.
   static Camera look_at(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
                         float fov_deg, int width, int height);
 

@@ -49,7 +49,7 @@ void trace_paths(const Accel& accel, TileWork& w) {
     w.rays[i] = w.paths[i].ray;
     w.stats.add(w.paths[i].kind);
   }
-  for (std::size_t i = 0; i < n; ++i) w.hits[i] = accel.intersect(w.rays[i]);
+  accel.intersect(w.rays.data(), n, w.hits.data());
 }
 
 void trace_shadows(const Accel& accel, TileWork& w) {
@@ -59,7 +59,7 @@ void trace_shadows(const Accel& accel, TileWork& w) {
   w.blocked.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) w.rays[i] = w.shadows[i].ray;
   w.stats.add(RayKind::shadow, n);
-  for (std::size_t i = 0; i < n; ++i) w.blocked[i] = accel.occluded(w.rays[i]);
+  accel.occluded(w.rays.data(), n, w.blocked.data());
   for (std::size_t i = 0; i < n; ++i)
     if (!w.blocked[i]) w.sum[w.shadows[i].pixel] += w.shadows[i].contribution;
 }

@@ -55,11 +55,12 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   const Bounds b = scene_bounds(desc);
   extent_ = std::max(glm::length(b.hi - b.lo), 1e-6f);
   if (lights_.empty() && !desc.has_camera) {
-    // A bare mesh: one light over the camera's shoulder, bright enough at the mesh.
+    // A bare mesh: one light over the camera's shoulder giving half the irradiance of a
+    // unit light at unit distance at the mesh centre (mid-grey on a 0.7 albedo surface).
     const glm::vec3 center = 0.5f * (b.lo + b.hi);
     const glm::vec3 pos = camera_.eye() + glm::vec3(0.0f, 0.5f * extent_, 0.0f);
     const float d = glm::length(pos - center);
-    lights_.push_back({pos, glm::vec3(d * d)});
+    lights_.push_back({pos, glm::vec3(0.5f * d * d)});
   }
 
   if (!positions_.empty())

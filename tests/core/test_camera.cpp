@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <initializer_list>
 
 #include "core/camera.h"
 
@@ -41,16 +42,26 @@ TEST_CASE("camera: the basis maps camera coordinates to world coordinates") {
 
 TEST_CASE("camera: look_at builds an orthonormal basis and a window from the field of view") {
   const Camera cam = Camera::look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0}, 90.0f, 201, 101);
-  const auto centre = cam.ray(100, 50);
-  CHECK(centre.dir.x == doctest::Approx(0.0f).epsilon(1e-6));
-  CHECK(centre.dir.y == doctest::Approx(0.0f).epsilon(1e-6));
-  CHECK(centre.dir.z == doctest::Approx(-1.0f));
+  const glm::vec3 centre = glm::normalize(cam.ray(100, 50).dir);
+  CHECK(centre.x == doctest::Approx(0.0f).epsilon(1e-6));
+  CHECK(centre.y == doctest::Approx(0.0f).epsilon(1e-6));
+  CHECK(centre.z == doctest::Approx(-1.0f));
   // fov 90: the top edge is 45 degrees up; the image is twice as wide as tall.
   const auto top = cam.ray(100, 0);
   CHECK(top.dir.y == doctest::Approx(-top.dir.z));
   const auto right = cam.ray(200, 50);
   CHECK(right.dir.x == doctest::Approx(-2.0f * right.dir.z * 100.0f / 101.0f).epsilon(0.02));
   CHECK(right.dir.x > 0.0f);  // u points right
+}
+
+TEST_CASE("camera: look_at puts the image plane close to the eye at any scale") {
+  // The notes' rays start on the image plane: a small scene close to the eye must not be
+  // clipped (a bunny of size 0.15 seen from 0.4 away).
+  for (float scale : {1e-3f, 1.0f, 1e4f}) {
+    const Camera cam = Camera::look_at(glm::vec3(0, 0, 0.4f) * scale, {0, 0, 0}, {0, 1, 0}, 40.0f, 64, 64);
+    const auto r = cam.ray(31.5f, 31.5f);
+    CHECK(glm::length(r.org - cam.eye()) == doctest::Approx(0.4e-3f * scale).epsilon(1e-3));
+  }
 }
 
 TEST_CASE("camera: bad parameters are rejected with a message") {
