@@ -16,7 +16,7 @@ namespace volley {
 /// query before commit). The message says what was expected.
 class VOLLEY_API Error : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  using std::runtime_error::runtime_error;  ///< constructed from the message
 };
 
 /// Facts about a committed Accel (for `volley info` and --stats). With a SIMD ISA the
@@ -49,12 +49,16 @@ struct AccelInfo {
 /// of threads may call intersect()/occluded() concurrently.
 class VOLLEY_API Accel {
  public:
+  /// An empty structure: add geometry, then commit().
   Accel();
+  /// Frees the geometry and the BVH. No query may be running.
   ~Accel();
-  Accel(Accel&&) noexcept;
-  Accel& operator=(Accel&&) noexcept;
-  Accel(const Accel&) = delete;
-  Accel& operator=(const Accel&) = delete;
+  /// Takes over `other`'s geometry and BVH; `other` is left unusable (assign to it or destroy it).
+  Accel(Accel&& other) noexcept;
+  /// Takes over `other`'s geometry and BVH, freeing this one's; `other` is left unusable.
+  Accel& operator=(Accel&& other) noexcept;
+  Accel(const Accel&) = delete;             ///< not copyable (a BVH can be large): move it
+  Accel& operator=(const Accel&) = delete;  ///< not copyable: move it
 
   /// Adds an indexed triangle mesh. `xyz` holds 3*vertex_count floats, `indices`
   /// 3*triangle_count vertex indices. Data is copied. Prim ids are assigned in order,

@@ -13,10 +13,10 @@ inline constexpr std::uint32_t kInvalidPrim = 0xffffffffu;
 /// The direction need not be normalized; t is in units of |dir|.
 /// Same field order as a `.vray` record (32 bytes).
 struct Ray {
-  float org[3];     // 12 bytes
-  float tmin;       //  4 bytes
-  float dir[3];     // 12 bytes
-  float tmax;       //  4 bytes
+  float org[3];  ///< origin (12 bytes)
+  float tmin;    ///< start of the search interval, inclusive (4 bytes)
+  float dir[3];  ///< direction, not necessarily normalized (12 bytes)
+  float tmax;    ///< end of the search interval, exclusive (4 bytes)
 };
 static_assert(sizeof(Ray) == 32, "Ray is a .vray record");
 
@@ -25,10 +25,11 @@ static_assert(sizeof(Ray) == 32, "Ray is a .vray record");
 /// the primitive was given when added. A miss has t = +inf and prim = kInvalidPrim.
 /// Polygons report u = v = 0. Same layout as a `.vhit` record (16 bytes).
 struct Hit {
-  float t = std::numeric_limits<float>::infinity();  // 4 bytes
-  float u = 0.0f;                                     // 4 bytes
-  float v = 0.0f;                                     // 4 bytes
-  std::uint32_t prim = kInvalidPrim;                  // 4 bytes
+  float t = std::numeric_limits<float>::infinity();  ///< distance in units of |dir| (4 bytes)
+  float u = 0.0f;                                     ///< barycentric weight of the second vertex (4 bytes)
+  float v = 0.0f;                                     ///< barycentric weight of the third vertex (4 bytes)
+  std::uint32_t prim = kInvalidPrim;                  ///< prim id, kInvalidPrim for a miss (4 bytes)
+  /// True for a hit, false for a miss.
   bool hit() const { return prim != kInvalidPrim; }
 };
 static_assert(sizeof(Hit) == 16, "Hit is a .vhit record");

@@ -1,0 +1,200 @@
+// C API: scene lifetime, geometry input, commit and info. Input is validated here, before
+// volley::Accel sees it, so that a rejected call leaves the scene exactly as it was.
+#include "capi/scene.h"
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "capi/guard.h"
+#include "simd/dispatch.h"
+#include "volley/volley.h"
+
+namespace volley::capi {
+namespace {
+
+/// Prim ids available: kInvalidPrim itself is the miss marker.
+constexpr std::uint64_t kMaxPrims = kInvalidPrim;
+
+/// The C++ test for a C enum value; fails for one outside the enum.
+TriangleTest to_test(volley_triangle_test test) {
+  switch (test) {
+    case VOLLEY_TEST_WATERTIGHT: return TriangleTest::watertight;
+    case VOLLEY_TEST_PLANE: return TriangleTest::plane;
+    case VOLLEY_TEST_MOLLER: return TriangleTest::moller;
+  }
+  fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown triangle test " + std::to_string(int(test)) +
+                                          " (expected VOLLEY_TEST_WATERTIGHT, VOLLEY_TEST_PLANE or VOLLEY_TEST_MOLLER)");
+}
+
+/// The C++ ISA for a C enum value; fails for one outside the enum.
+Isa to_isa(volley_isa isa) {
+  switch (isa) {
+    case VOLLEY_ISA_AUTO: return Isa::automatic;
+    case VOLLEY_ISA_SCALAR: return Isa::scalar;
+    case VOLLEY_ISA_SSE42: return Isa::sse42;
+    case VOLLEY_ISA_AVX2: return Isa::avx2;
+    case VOLLEY_ISA_AVX512: return Isa::avx512;
+  }
+  fail(VOLLEY_ERROR_INVALID_ARGUMENT,
+       "unknown ISA " + std::to_string(int(isa)) + " (expected a VOLLEY_ISA_* value)");
+}
+
+volley_triangle_test from_test(TriangleTest test) {
+  switch (test) {
+    case TriangleTest::plane: return VOLLEY_TEST_PLANE;
+    case TriangleTest::moller: return VOLLEY_TEST_MOLLER;
+    case TriangleTest::watertight: break;
+  }
+  return VOLLEY_TEST_WATERTIGHT;
+}
+
+volley_isa from_isa(Isa isa) {
+  switch (isa) {
+    case Isa::automatic: return VOLLEY_ISA_AUTO;
+    case Isa::scalar: return VOLLEY_ISA_SCALAR;
+    case Isa::sse42: return VOLLEY_ISA_SSE42;
+    case Isa::avx2: return VOLLEY_ISA_AVX2;
+    case Isa::avx512: return VOLLEY_ISA_AVX512;
+  }
+  return VOLLEY_ISA_AUTO;
+}
+
+/// Fails when `count` more primitives would run out of prim ids.
+void require_prim_ids(const volley_scene& scene, std::uint64_t count) {
+  if (count > kMaxPrims - scene.prims)
+    fail(VOLLEY_ERROR_INVALID_ARGUMENT, "too many primitives: the scene has " + std::to_string(scene.prims) +
+                                            ", adding " + std::to_string(count) + " would pass the limit of " +
+                                            std::to_string(kMaxPrims) + " prim ids");
+}
+
+/// Fails with VOLLEY_ERROR_INVALID_GEOMETRY at the first non-finite coordinate.
+void require_finite(const float* xyz, std::size_t vertex_count) {
+  for (std::size_t i = 0; i < 3 * vertex_count; ++i)
+    if (!std::isfinite(xyz[i]))
+      fail(VOLLEY_ERROR_INVALID_GEOMETRY, "vertex " + std::to_string(i / 3) + " has a non-finite coordinate (" +
+                                              "xyz[" + std::to_string(i) + "] = " + std::to_string(xyz[i]) + ")");
+}
+
+/// Fails when 3 * count does not fit in size_t (so no array of that size can exist).
+void require_triple_fits(std::size_t count, const char* what) {
+  if (count > SIZE_MAX / 3) fail(VOLLEY_ERROR_INVALID_ARGUMENT, std::string(what) + " is absurdly large");
+}
+
+}  // namespace
+
+void fail_not_committed(const volley_scene* scene) {
+  require_pointer(scene, "scene");
+  fail(VOLLEY_ERROR_NOT_COMMITTED, "the scene changed (or was never committed): call volley_scene_commit first");
+}
+
+}  // namespace volley::capi
+
+using namespace volley::capi;
+
+extern "C" {
+
+int volley_isa_supported(volley_isa isa) {
+  switch (isa) {
+    case VOLLEY_ISA_AUTO:
+    case VOLLEY_ISA_SCALAR: return 1;
+    case VOLLEY_ISA_SSE42: return volley::simd::cpu_has(volley::Isa::sse42) ? 1 : 0;
+    case VOLLEY_ISA_AVX2: return volley::simd::cpu_has(volley::Isa::avx2) ? 1 : 0;
+    case VOLLEY_ISA_AVX512: return volley::simd::cpu_has(volley::Isa::avx512) ? 1 : 0;
+  }
+  return 0;
+}
+
+volley_status volley_scene_create(volley_scene** out) {
+  return guarded("volley_scene_create", VOLLEY_ERROR_INTERNAL, [&] {
+    require_pointer(out, "out");
+    *out = new volley_scene;
+  });
+}
+
+void volley_scene_destroy(volley_scene* scene) { delete scene; }
+
+volley_status volley_scene_add_triangles(volley_scene* scene, const float* xyz, size_t vertex_count,
+                                         const uint32_t* indices, size_t triangle_count, uint32_t* first_prim) {
+  return guarded("volley_scene_add_triangles", VOLLEY_ERROR_INVALID_GEOMETRY, [&] {
+    require_pointer(scene, "scene");
+    require_triple_fits(vertex_count, "vertex_count");
+    require_triple_fits(triangle_count, "triangle_count");
+    if (vertex_count > 0) require_pointer(xyz, "xyz");
+    if (triangle_count > 0) require_pointer(indices, "indices");
+    require_prim_ids(*scene, triangle_count);
+    require_finite(xyz, vertex_count);
+    for (std::size_t i = 0; i < 3 * triangle_count; ++i)
+      if (indices[i] >= vertex_count)
+        fail(VOLLEY_ERROR_INVALID_GEOMETRY, "triangle " + std::to_string(i / 3) + " uses vertex index " +
+                                                std::to_string(indices[i]) + ", but there are only " +
+                                                std::to_string(vertex_count) + " vertices");
+    // Accel checks the same again; it never throws here, so a failure above leaves the
+    // scene untouched (Accel::add_triangles itself may stop half-way through a mesh).
+    const std::uint32_t first = scene->accel.add_triangles(xyz, vertex_count, indices, triangle_count);
+    scene->prims += triangle_count;
+    scene->committed = false;
+    if (first_prim) *first_prim = first;
+  });
+}
+
+volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, size_t vertex_count, uint32_t* prim) {
+  return guarded("volley_scene_add_polygon", VOLLEY_ERROR_INVALID_GEOMETRY, [&] {
+    require_pointer(scene, "scene");
+    require_pointer(xyz, "xyz");
+    require_triple_fits(vertex_count, "vertex_count");
+    if (vertex_count < 3)
+      fail(VOLLEY_ERROR_INVALID_GEOMETRY, "a polygon needs at least 3 vertices, got " + std::to_string(vertex_count));
+    require_prim_ids(*scene, 1);
+    require_finite(xyz, vertex_count);
+    // Planarity and area: Accel's check (volley::Error -> VOLLEY_ERROR_INVALID_GEOMETRY);
+    // it throws before it adds anything.
+    const std::uint32_t id = scene->accel.add_polygon(xyz, vertex_count);
+    scene->prims += 1;
+    scene->committed = false;
+    if (prim) *prim = id;
+  });
+}
+
+volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa) {
+  return guarded("volley_scene_commit", VOLLEY_ERROR_INTERNAL, [&] {
+    require_pointer(scene, "scene");
+    volley::Options options;
+    options.test = to_test(test);
+    options.isa = to_isa(isa);
+    try {
+      // The ISA commit would run (VOLLEY_ISA applied for auto), resolved here so that an
+      // unsupported one gets its own status.
+      options.isa = volley::simd::resolve_isa(options.isa);
+    } catch (const std::invalid_argument& e) {
+      fail(VOLLEY_ERROR_UNSUPPORTED_ISA, e.what());
+    }
+    scene->committed = false;
+    scene->accel.commit(options);
+    scene->committed = true;
+  });
+}
+
+volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info* info) {
+  return guarded("volley_scene_get_info", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    require_pointer(info, "info");
+    const volley::AccelInfo a = scene->accel.info();
+    volley_scene_info out{};
+    out.triangles = a.triangles;
+    out.degenerate = a.degenerate;
+    out.polygons = a.polygons;
+    out.nodes = a.nodes;
+    out.leaves = a.leaves;
+    out.depth = a.depth;
+    out.bytes = a.bytes;
+    out.build_seconds = a.build_seconds;
+    out.width = a.width;
+    out.block_width = a.block_width;
+    out.test = from_test(a.test);
+    out.isa = from_isa(a.isa);
+    *info = out;
+  });
+}
+
+}  // extern "C"
