@@ -22,16 +22,18 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
   for (std::size_t i = 0; i < 3 * vertex_count; ++i)
     if (!std::isfinite(xyz[i]))
       throw Error("add_triangles: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+  // Validate every index first, so a rejected call adds nothing.
+  for (std::size_t i = 0; i < 3 * triangle_count; ++i)
+    if (indices[i] >= vertex_count)
+      throw Error("add_triangles: triangle " + std::to_string(i / 3) + " uses vertex index " +
+                  std::to_string(indices[i]) + ", but there are only " + std::to_string(vertex_count) +
+                  " vertices");
   const std::uint32_t first = impl_->next_id;
   auto& tris = impl_->triangles;
   tris.reserve(tris.size() + 3 * triangle_count);
   for (std::size_t t = 0; t < triangle_count; ++t) {
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t idx = indices[3 * t + k];
-      if (idx >= vertex_count)
-        throw Error("add_triangles: triangle " + std::to_string(t) + " uses vertex index " +
-                    std::to_string(idx) + ", but there are only " + std::to_string(vertex_count) +
-                    " vertices");
       tris.emplace_back(xyz[3 * idx], xyz[3 * idx + 1], xyz[3 * idx + 2]);
     }
     impl_->triangle_ids.push_back(impl_->next_id++);

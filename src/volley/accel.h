@@ -76,7 +76,8 @@ class VOLLEY_API Accel {
   void commit(const Options& options = {});
 
   /// Closest hit along the ray (tmin <= t < tmax), or a miss. A ray with a non-finite
-  /// origin or direction component, or a NaN tmin or tmax, misses.
+  /// origin or direction component, a zero direction, or a NaN tmin or tmax, misses (the
+  /// same holds for every packet lane and stream ray).
   Hit intersect(const Ray& ray) const;
   /// True when anything is hit with tmin <= t < tmax.
   bool occluded(const Ray& ray) const;

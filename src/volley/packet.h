@@ -10,9 +10,9 @@
 namespace volley {
 
 /// K rays in structure-of-arrays form, 64-byte aligned.
-/// Lane i is active when bit i of `active` is set. Inactive lanes must be inert: the
-/// loaders give them org = dir = 0, tmin = 0, tmax = -inf, so no kernel can report a
-/// hit for them even before it looks at `active`. Kernels read all K lanes.
+/// Lane i is active when bit i of `active` is set. Accel's packet queries ignore inactive
+/// lanes whatever they hold; the internal kernels read all K lanes, so load() also makes
+/// them inert (org = dir = 0, tmin = 0, tmax = -inf: no hit possible).
 template <int K>
 struct alignas(64) RayPacket {
   static_assert(K == 4 || K == 8 || K == 16, "K rays per packet: 4, 8 or 16");
