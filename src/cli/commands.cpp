@@ -22,6 +22,8 @@ void add(CLI::App& app, Runner (*registrar)(CLI::App&)) {
 void register_commands(CLI::App& app) {
   add(app, register_render);
   add(app, register_info);
+  add(app, register_rays);
+  add(app, register_trace);
 }
 
 int run_selected(const CLI::App&) {

@@ -18,5 +18,7 @@ int run_selected(const CLI::App& app);
 /// bound at registration).
 Runner register_render(CLI::App& app);
 Runner register_info(CLI::App& app);
+Runner register_rays(CLI::App& app);
+Runner register_trace(CLI::App& app);
 
 }  // namespace volley::cli

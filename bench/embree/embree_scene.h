@@ -1,0 +1,186 @@
+// Embree 3 on volley's triangles, for the side-by-side benchmark (volley_vs_embree) and
+// the agreement test (tests/embree): one device, one scene holding one triangle geometry
+// built from a merged indexed mesh (triangle i is Embree primID i, as it is volley's prim
+// id i), and the conversions between volley's rays/hits and Embree's.
+//
+// Interval semantics differ: volley searches tmin <= t < tmax (half-open), Embree's
+// kernels accept tnear < t <= tfar (its documentation says [tnear, tfar]). to_embree()
+// sets tfar to the float just below a finite tmax, which makes the upper ends agree
+// exactly; at the lower end the two differ only for t == tmin exactly (a hit at the ray
+// origin), which offset origins and tmin = 0 camera rays never produce.
+#pragma once
+#include <embree3/rtcore.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "volley/ray.h"
+
+namespace volley::bench {
+
+/// How the Embree scene is built.
+struct EmbreeConfig {
+  RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  ///< Embree's default; HIGH = spatial splits
+  bool robust = false;                                 ///< RTC_SCENE_FLAG_ROBUST (else NONE)
+  std::string device_config;                           ///< rtcNewDevice string, e.g. "threads=1"
+};
+
+/// Names as volley_vs_embree prints them ("low", "medium", "high", "refit").
+inline const char* to_string(RTCBuildQuality q) {
+  switch (q) {
+    case RTC_BUILD_QUALITY_LOW: return "low";
+    case RTC_BUILD_QUALITY_MEDIUM: return "medium";
+    case RTC_BUILD_QUALITY_HIGH: return "high";
+    default: return "refit";
+  }
+}
+
+/// An Embree device and a committed scene of one triangle mesh. Not copyable. Queries
+/// through scene() are thread-safe (Embree's rule for committed scenes).
+class EmbreeScene {
+ public:
+  /// `xyz`: 3 * vertex_count floats; `indices`: 3 * triangle_count vertex indices. The
+  /// data is copied into Embree's own buffers. Throws std::runtime_error on an Embree error.
+  EmbreeScene(const float* xyz, std::size_t vertex_count, const std::uint32_t* indices,
+              std::size_t triangle_count, const EmbreeConfig& config = {}) {
+    device_ = rtcNewDevice(config.device_config.empty() ? nullptr : config.device_config.c_str());
+    if (!device_) throw std::runtime_error("embree: rtcNewDevice failed (" + error_name(rtcGetDeviceError(nullptr)) + ")");
+    rtcSetDeviceErrorFunction(device_, &EmbreeScene::on_error, nullptr);
+    const auto start = std::chrono::steady_clock::now();
+    scene_ = rtcNewScene(device_);
+    rtcSetSceneFlags(scene_, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneBuildQuality(scene_, config.quality);
+    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, config.quality);
+    // rtcSetNewGeometryBuffer pads the allocation as Embree's SIMD loads require.
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), vertex_count));
+    auto* t = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
+                                                                  RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t),
+                                                                  triangle_count));
+    if (!v || !t) throw std::runtime_error("embree: cannot allocate geometry buffers");
+    for (std::size_t i = 0; i < 3 * vertex_count; ++i) v[i] = xyz[i];
+    for (std::size_t i = 0; i < 3 * triangle_count; ++i) t[i] = indices[i];
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(scene_, geometry, 0);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(scene_);
+    build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (const RTCError e = rtcGetDeviceError(device_); e != RTC_ERROR_NONE)
+      throw std::runtime_error("embree: scene build failed (" + error_name(e) + ")");
+  }
+  ~EmbreeScene() {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+  }
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  /// The committed scene (owned; valid while this object lives).
+  RTCScene scene() const { return scene_; }
+  /// The device the scene lives on (owned).
+  RTCDevice device() const { return device_; }
+  /// Wall time of geometry upload and rtcCommitScene.
+  double build_seconds() const { return build_seconds_; }
+
+  /// Closest hit of one ray with rtcIntersect1, as a volley Hit (slow path for tests).
+  Hit intersect(const Ray& ray) const;
+  /// rtcOccluded1 on one ray.
+  bool occluded(const Ray& ray) const;
+
+  /// A readable name of an Embree error code.
+  static std::string error_name(RTCError e) {
+    switch (e) {
+      case RTC_ERROR_NONE: return "no error";
+      case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+      case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+      case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+      case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+      case RTC_ERROR_CANCELLED: return "cancelled";
+      default: return "unknown error";
+    }
+  }
+
+ private:
+  static void on_error(void*, RTCError code, const char* message) {
+    std::fprintf(stderr, "embree error: %s: %s\n", error_name(code).c_str(), message ? message : "");
+  }
+
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  double build_seconds_ = 0.0;
+};
+
+/// Embree's tfar for a volley tmax: the float below a finite tmax, so that Embree's
+/// t <= tfar means t < tmax (see the top of this file). NaN stays NaN.
+inline float embree_tfar(float tmax) {
+  return std::isfinite(tmax) ? std::nextafter(tmax, -std::numeric_limits<float>::infinity()) : tmax;
+}
+
+/// A volley ray as an Embree ray (mask = all, time 0, no hit yet).
+inline void to_embree(const Ray& r, RTCRayHit& e) {
+  e.ray.org_x = r.org[0], e.ray.org_y = r.org[1], e.ray.org_z = r.org[2];
+  e.ray.tnear = r.tmin;
+  e.ray.dir_x = r.dir[0], e.ray.dir_y = r.dir[1], e.ray.dir_z = r.dir[2];
+  e.ray.time = 0.0f;
+  e.ray.tfar = embree_tfar(r.tmax);
+  e.ray.mask = 0xffffffffu;
+  e.ray.id = 0;
+  e.ray.flags = 0;
+  e.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  e.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  e.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/// An Embree closest-hit answer as a volley Hit (same barycentric convention:
+/// p = (1-u-v) p0 + u p1 + v p2).
+inline Hit from_embree(const RTCRayHit& e) {
+  if (e.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+  return Hit{e.ray.tfar, e.hit.u, e.hit.v, e.hit.primID};
+}
+
+/// Lane i of an Embree 16-ray packet from a volley ray.
+inline void to_embree(const Ray& r, RTCRayHit16& e, int i) {
+  e.ray.org_x[i] = r.org[0], e.ray.org_y[i] = r.org[1], e.ray.org_z[i] = r.org[2];
+  e.ray.tnear[i] = r.tmin;
+  e.ray.dir_x[i] = r.dir[0], e.ray.dir_y[i] = r.dir[1], e.ray.dir_z[i] = r.dir[2];
+  e.ray.time[i] = 0.0f;
+  e.ray.tfar[i] = embree_tfar(r.tmax);
+  e.ray.mask[i] = 0xffffffffu;
+  e.ray.id[i] = unsigned(i);
+  e.ray.flags[i] = 0;
+  e.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+  e.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+  e.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/// Lane i of an Embree 16-ray packet answer as a volley Hit.
+inline Hit from_embree(const RTCRayHit16& e, int i) {
+  if (e.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) return Hit{};
+  return Hit{e.ray.tfar[i], e.hit.u[i], e.hit.v[i], e.hit.primID[i]};
+}
+
+inline Hit EmbreeScene::intersect(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit e;
+  to_embree(ray, e);
+  rtcIntersect1(scene_, &context, &e);
+  return from_embree(e);
+}
+
+inline bool EmbreeScene::occluded(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit e;
+  to_embree(ray, e);
+  rtcOccluded1(scene_, &context, &e.ray);
+  return e.ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+}  // namespace volley::bench

@@ -1,0 +1,205 @@
+// volley trace: traces a ray file against a scene in one of the query modes (single
+// rays, SoA packets, streams), closest hit or occlusion, and prints the rate: best of
+// --reps repetitions of the intersection loop alone (loading and the BVH build are not
+// timed), in a stable key=value line for scripts and a human summary after it:
+//
+//   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
+//          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N        (one line)
+//
+// packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
+// hits counts closest hits, or blocked rays with --occluded. Keys are only ever added.
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "cli/commands.h"
+#include "cli/common.h"
+#include "io/ray_file.h"
+#include "io/scene_loader.h"
+#include "render/scene.h"
+#include "volley/accel.h"
+#include "volley/packet.h"
+
+namespace volley::cli {
+namespace {
+
+struct TraceArgs {
+  std::string scene;
+  std::string rays;
+  std::string output;
+  bool occluded = false;
+  std::string mode = "single";
+  int packet = 16;
+  int threads = 0;
+  int reps = 5;
+  KernelArgs kernel;
+};
+
+/// Rays per unit of work handed to a thread: a multiple of every packet width, so a
+/// chunk never splits a packet (and a 4x4 block of primary rays stays in one packet).
+constexpr std::size_t kChunk = 1024;
+static_assert(kChunk % 16 == 0, "chunks hold whole packets");
+
+/// The answers of one pass: closest hits, or one byte per ray for occlusion.
+struct Answers {
+  std::vector<Hit> hits;
+  std::vector<std::uint8_t> blocked;
+};
+
+/// Traces rays[begin, end) into `out` (the same indices).
+using ChunkTracer = std::function<void(std::size_t begin, std::size_t end, Answers& out)>;
+
+template <int K>
+void trace_packets(const Accel& accel, const Ray* rays, std::size_t begin, std::size_t end, bool occluded,
+                   Answers& out) {
+  RayPacket<K> packet;
+  HitPacket<K> hits;
+  for (std::size_t i = begin; i < end; i += K) {
+    const int count = int(std::min<std::size_t>(K, end - i));
+    load(packet, rays + i, count);
+    if (occluded) {
+      const std::uint32_t mask = accel.occluded(packet);
+      for (int l = 0; l < count; ++l) out.blocked[i + l] = std::uint8_t((mask >> l) & 1u);
+    } else {
+      reset(hits);
+      accel.intersect(packet, hits);
+      store(hits, out.hits.data() + i, count);
+    }
+  }
+}
+
+ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::string& mode, int packet,
+                        bool occluded) {
+  const Ray* r = rays.data();
+  if (mode == "packet") {
+    return [&accel, r, packet, occluded](std::size_t begin, std::size_t end, Answers& out) {
+      if (packet == 4) trace_packets<4>(accel, r, begin, end, occluded, out);
+      else if (packet == 8) trace_packets<8>(accel, r, begin, end, occluded, out);
+      else trace_packets<16>(accel, r, begin, end, occluded, out);
+    };
+  }
+  if (mode == "stream") {
+    return [&accel, r, occluded](std::size_t begin, std::size_t end, Answers& out) {
+      if (occluded) accel.occluded(r + begin, end - begin, out.blocked.data() + begin);
+      else accel.intersect(r + begin, end - begin, out.hits.data() + begin);
+    };
+  }
+  return [&accel, r, occluded](std::size_t begin, std::size_t end, Answers& out) {
+    if (occluded) {
+      for (std::size_t i = begin; i < end; ++i) out.blocked[i] = accel.occluded(r[i]) ? 1 : 0;
+    } else {
+      for (std::size_t i = begin; i < end; ++i) out.hits[i] = accel.intersect(r[i]);
+    }
+  };
+}
+
+/// One timed pass over all rays, in kChunk chunks: on the calling thread for one thread
+/// (no scheduler in the measurement), else spread by oneTBB inside `arena`.
+double timed_pass(const ChunkTracer& trace, std::size_t count, int threads, tbb::task_arena& arena, Answers& out) {
+  const auto start = std::chrono::steady_clock::now();
+  if (threads == 1) {
+    for (std::size_t b = 0; b < count; b += kChunk) trace(b, std::min(count, b + kChunk), out);
+  } else {
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (count + kChunk - 1) / kChunk, 1),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t c = r.begin(); c < r.end(); ++c)
+                            trace(c * kChunk, std::min(count, (c + 1) * kChunk), out);
+                        });
+    });
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+Runner register_trace(CLI::App& app) {
+  auto args = std::make_shared<TraceArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "trace",
+      "Trace a ray file (.vray) against a scene and print Mrays/s (best of --reps, intersection\n"
+      "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
+  cmd->add_option("scene", args->scene, "Scene file (.json) or mesh (.obj, .ply)")->required();
+  cmd->add_option("--rays", args->rays, "Ray file (.vray) from `volley rays`")->required();
+  cmd->add_option("-o,--output", args->output, "Write the answers as a hit file (.vhit)");
+  cmd->add_flag("--occluded", args->occluded, "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
+  cmd->add_option("--mode", args->mode, "single (one ray at a time), packet (SoA packets of consecutive rays), stream")
+      ->check(CLI::IsMember({"single", "packet", "stream"}))
+      ->capture_default_str();
+  cmd->add_option("--packet", args->packet, "Rays per packet in packet mode")
+      ->check(CLI::IsMember({4, 8, 16}))
+      ->capture_default_str();
+  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  cmd->add_option("--reps", args->reps, "Timed repetitions; the best is reported")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  add_kernel_options(*cmd, args->kernel);
+
+  return [args]() {
+    const TraceArgs& a = *args;
+    const std::vector<Ray> rays = io::read_rays(a.rays);
+    const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
+    const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel));
+    const Accel& accel = scene.accel();
+    const AccelInfo info = accel.info();
+
+    const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    const ChunkTracer trace = make_tracer(accel, rays, a.mode, a.packet, a.occluded);
+    Answers answers;
+    if (a.occluded) answers.blocked.assign(rays.size(), 0);
+    else answers.hits.assign(rays.size(), Hit{});
+
+    std::vector<double> seconds;
+    for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers));
+    std::sort(seconds.begin(), seconds.end());
+    const double best = seconds.front();
+    const double median = seconds[seconds.size() / 2];
+
+    std::size_t hit_count = 0;
+    if (a.occluded) {
+      for (std::uint8_t b : answers.blocked) hit_count += b;
+    } else {
+      for (const Hit& h : answers.hits) hit_count += h.hit() ? 1 : 0;
+    }
+    const double mrays = best > 0.0 ? double(rays.size()) / best * 1e-6 : 0.0;
+    const int packet = a.mode == "packet" ? a.packet : 0;
+    const std::string mode = packet ? "packet" + std::to_string(packet) : a.mode;  // for the summary
+    const std::string test(to_string(info.test)), isa(to_string(info.isa));
+
+    std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu\n",
+                a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
+                a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count);
+    std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
+                "%.2f Mrays/s; %zu %s (%.1f%%); BVH built in %.3f s\n",
+                a.scene.c_str(), rays.size(), a.rays.c_str(), a.occluded ? "occlusion" : "closest hit", mode.c_str(),
+                test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
+                hit_count, a.occluded ? "blocked" : "hit", rays.empty() ? 0.0 : 100.0 * double(hit_count) / double(rays.size()),
+                info.build_seconds);
+
+    if (!a.output.empty()) {
+      if (a.occluded) {
+        std::vector<Hit> records(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) records[i] = io::occlusion_record(answers.blocked[i] != 0);
+        io::write_hits(a.output, records);
+      } else {
+        io::write_hits(a.output, answers.hits);
+      }
+      std::printf("hits -> %s\n", a.output.c_str());
+    }
+    return 0;
+  };
+}
+
+}  // namespace volley::cli

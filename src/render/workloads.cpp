@@ -1,0 +1,139 @@
+#include "render/workloads.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "render/rng.h"
+#include "render/spawn.h"
+
+namespace volley::render {
+namespace {
+
+// Runs body(begin, end) over [0, count) in chunks on `threads` workers (0: all).
+template <class Body>
+void parallel_chunks(std::size_t count, int threads, const Body& body) {
+  const int n = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(n);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  });
+}
+
+// Cosine-weighted unit direction about unit n (Malley's method; orthonormal basis of
+// Duff et al. 2017), as the path tracer draws it.
+glm::vec3 cosine_direction(const glm::vec3& n, Rng& rng) {
+  const float r = std::sqrt(rng.uniform());
+  const float phi = 6.28318530718f * rng.uniform();
+  const float sign = std::copysign(1.0f, n.z);
+  const float a = -1.0f / (sign + n.z);
+  const float b = n.x * n.y * a;
+  const glm::vec3 t(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+  const glm::vec3 bt(b, sign + n.y * n.y * a, -n.y);
+  const float z = std::sqrt(std::max(0.0f, 1.0f - r * r));
+  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * bt + z * n);
+}
+
+// Secondary rays from the hits, one optional ray per primary ray, made in parallel and
+// compacted in primary order (so the result does not depend on the thread count).
+template <class Make>
+std::vector<Ray> from_hits(std::span<const Ray> primary, std::span<const Hit> hits, const Make& make) {
+  if (primary.size() != hits.size())
+    throw std::invalid_argument("workload: " + std::to_string(hits.size()) + " hits for " +
+                                std::to_string(primary.size()) + " rays");
+  std::vector<Ray> candidate(primary.size());
+  std::vector<unsigned char> keep(primary.size(), 0);
+  parallel_chunks(primary.size(), 0, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (hits[i].hit()) keep[i] = make(i, candidate[i]) ? 1 : 0;
+  });
+  std::vector<Ray> out;
+  out.reserve(primary.size());
+  for (std::size_t i = 0; i < primary.size(); ++i)
+    if (keep[i]) out.push_back(candidate[i]);
+  return out;
+}
+
+}  // namespace
+
+std::string_view to_string(Workload workload) {
+  switch (workload) {
+    case Workload::primary: return "primary";
+    case Workload::shadow: return "shadow";
+    case Workload::diffuse: return "diffuse";
+  }
+  return "?";
+}
+
+std::optional<Workload> parse_workload(std::string_view name) {
+  for (Workload w : {Workload::primary, Workload::shadow, Workload::diffuse})
+    if (name == to_string(w)) return w;
+  return std::nullopt;
+}
+
+std::vector<std::pair<int, int>> block_order(int width, int height) {
+  std::vector<std::pair<int, int>> order;
+  order.reserve(std::size_t(std::max(width, 0)) * std::size_t(std::max(height, 0)));
+  for (int by = 0; by < height; by += kBlock)
+    for (int bx = 0; bx < width; bx += kBlock)
+      for (int y = by; y < std::min(by + kBlock, height); ++y)
+        for (int x = bx; x < std::min(bx + kBlock, width); ++x) order.emplace_back(x, y);
+  return order;
+}
+
+std::vector<Ray> primary_rays(const core::Camera& camera) {
+  const auto order = block_order(camera.width(), camera.height());
+  std::vector<Ray> rays(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto r = camera.ray(float(order[i].first), float(order[i].second));
+    rays[i] = Ray{{r.org.x, r.org.y, r.org.z}, r.tmin, {r.dir.x, r.dir.y, r.dir.z}, r.tmax};
+  }
+  return rays;
+}
+
+std::vector<Hit> trace_all(const Accel& accel, std::span<const Ray> rays, int threads) {
+  std::vector<Hit> hits(rays.size());
+  parallel_chunks(rays.size(), threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) hits[i] = accel.intersect(rays[i]);
+  });
+  return hits;
+}
+
+std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits) {
+  if (scene.lights().empty()) throw Error("the scene has no light: no shadow rays to make");
+  const glm::vec3 light = scene.lights().front().position;
+  return from_hits(primary, hits, [&](std::size_t i, Ray& out) {
+    const SurfacePoint s = scene.surface(primary[i], hits[i]);
+    // A light behind the surface (seen from the viewer's side) is never tested.
+    if (!(glm::dot(light - s.p, s.ng) > 0.0f)) return false;
+    out = spawn_shadow_ray(s.p, s.p_error, s.ng, light);
+    return true;
+  });
+}
+
+std::vector<Ray> diffuse_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits,
+                              std::uint64_t seed) {
+  return from_hits(primary, hits, [&](std::size_t i, Ray& out) {
+    const SurfacePoint s = scene.surface(primary[i], hits[i]);
+    Rng rng(seed, i);
+    const glm::vec3 w = cosine_direction(s.ns, rng);
+    if (!(glm::dot(w, s.ng) > 0.0f)) return false;  // the shading normal sent it below the surface
+    out = spawn_ray(s.p, s.p_error, s.ng, w);
+    return true;
+  });
+}
+
+std::vector<Ray> make_workload(const Scene& scene, Workload workload, std::uint64_t seed, int threads) {
+  std::vector<Ray> primary = primary_rays(scene.camera());
+  if (workload == Workload::primary) return primary;
+  const std::vector<Hit> hits = trace_all(scene.accel(), primary, threads);
+  return workload == Workload::shadow ? shadow_rays(scene, primary, hits) : diffuse_rays(scene, primary, hits, seed);
+}
+
+}  // namespace volley::render
