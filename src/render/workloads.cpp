@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "render/rng.h"
+#include "render/sampling.h"
 #include "render/spawn.h"
 
 namespace volley::render {
@@ -24,20 +25,6 @@ void parallel_chunks(std::size_t count, int threads, const Body& body) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024),
                       [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
   });
-}
-
-// Cosine-weighted unit direction about unit n (Malley's method; orthonormal basis of
-// Duff et al. 2017), as the path tracer draws it.
-glm::vec3 cosine_direction(const glm::vec3& n, Rng& rng) {
-  const float r = std::sqrt(rng.uniform());
-  const float phi = 6.28318530718f * rng.uniform();
-  const float sign = std::copysign(1.0f, n.z);
-  const float a = -1.0f / (sign + n.z);
-  const float b = n.x * n.y * a;
-  const glm::vec3 t(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
-  const glm::vec3 bt(b, sign + n.y * n.y * a, -n.y);
-  const float z = std::sqrt(std::max(0.0f, 1.0f - r * r));
-  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * bt + z * n);
 }
 
 // Secondary rays from the hits, one optional ray per primary ray, made in parallel and

@@ -2,6 +2,8 @@
 // a good render prints its summary line and writes a PNG.
 #include <doctest/doctest.h>
 
+#include "cli/cli_run.h"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -12,21 +14,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
-  int status;
-  std::string output;  // stdout and stderr together
-};
-
-Run run(const std::string& args) {
-  const std::string cmd = std::string(VOLLEY_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  std::string out;
-  std::array<char, 4096> buf;
-  while (std::size_t n = std::fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
-}
+using volley::test::Run;
+using volley::test::run;
 
 fs::path temp_file(const std::string& name, const std::string& content) {
   const fs::path dir = fs::temp_directory_path() / "volley_cli_test";

@@ -4,6 +4,8 @@
 // a message that names it.
 #include <doctest/doctest.h>
 
+#include "cli/cli_run.h"
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -27,21 +29,8 @@ using namespace volley;
 
 namespace {
 
-struct Run {
-  int status;
-  std::string output;  // stdout and stderr together
-};
-
-Run run(const std::string& args) {
-  const std::string cmd = std::string(VOLLEY_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  std::string out;
-  std::array<char, 4096> buf;
-  while (std::size_t n = std::fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
-}
+using test::Run;
+using test::run;
 
 fs::path temp_path(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / "volley_trace_test";
