@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "io/scene_loader.h"
+#include "render/pipeline.h"
 #include "render/scene.h"
 
 namespace volley::cli {
@@ -48,6 +49,8 @@ Runner register_info(CLI::App& app) {
     std::printf("features    lights %s, mirrors %s, refraction %s, emission %s, polygons %s, smooth normals %s\n",
                 f.lights ? "yes" : "no", f.mirrors ? "yes" : "no", f.refraction ? "yes" : "no",
                 f.emission ? "yes" : "no", f.polygons ? "yes" : "no", f.smooth_normals ? "yes" : "no");
+    std::printf("skipped     %s\n",
+                render::describe_skipped(render::needed_stages(scene.features()), scene.features()).c_str());
     return 0;
   };
 }

@@ -10,6 +10,7 @@
 #include "cli/progress.h"
 #include "io/png_writer.h"
 #include "io/scene_loader.h"
+#include "render/pipeline.h"
 #include "render/renderer.h"
 
 namespace volley::cli {
@@ -22,6 +23,7 @@ struct RenderArgs {
   std::string integrator;
   long long seed = -1;
   bool stats = false;
+  bool no_specialize = false;
   KernelArgs kernel;
 };
 
@@ -37,10 +39,7 @@ void print_stats(const render::Scene& scene, const render::RenderResult& r) {
               info.nodes, info.leaves, info.depth, info.sah_cost,
               double(info.bytes) / double(std::max<std::size_t>(1, info.triangles + info.polygons)),
               info.build_seconds);
-  std::printf("skipped: %s%s%s%s\n", f.lights ? "" : "shadow rays (no lights) ",
-              f.mirrors ? "" : "reflection rays (no mirrors) ",
-              f.refraction ? "" : "refraction rays (no transmissive materials) ",
-              f.polygons ? "" : "polygon tests (no polygons)");
+  std::printf("skipped: %s\n", render::describe_skipped(r.stages, f).c_str());
 }
 
 }  // namespace
@@ -59,6 +58,8 @@ Runner register_render(CLI::App& app) {
       ->check(CLI::IsMember({"whitted", "path"}));
   cmd->add_option("--seed", args->seed, "Random seed (images are identical for a given seed)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--stats", args->stats, "Print rays by kind, kernel and BVH facts, what was skipped");
+  cmd->add_flag("--no-specialize", args->no_specialize,
+                "Run the general pipeline (every stage) instead of one specialised to the scene; same image");
   add_kernel_options(*cmd, args->kernel);
 
   return [args]() {
@@ -74,6 +75,7 @@ Runner register_render(CLI::App& app) {
     ro.integrator = integrator == "path" ? render::IntegratorKind::path : render::IntegratorKind::whitted;
     ro.seed = a.seed >= 0 ? std::uint64_t(a.seed) : s.seed;
     ro.threads = a.threads;
+    ro.specialize = !a.no_specialize;
 
     const render::Scene scene(desc, width, height, kernel_options(a.kernel));
     ProgressBar bar("rendering");

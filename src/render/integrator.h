@@ -7,15 +7,23 @@
 #include <glm/glm.hpp>
 
 #include "render/path_state.h"
+#include "render/pipeline.h"
 #include "render/scene.h"
 
 namespace volley::render {
 
 enum class IntegratorKind { whitted, path };
 
+/// One shading step: the light `path` brings to its pixel directly (already weighted);
+/// shadow queries and next-bounce rays are appended.
+using ShadeFn = glm::vec3 (*)(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
+                              std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
+
 /// Whitted (1980), the notes' ray tracer: emission + ambient + Phong from each visible
 /// light, plus a mirror ray and Fresnel-weighted (Schlick) refraction and reflection rays,
-/// total internal reflection handled, up to max_depth bounces.
+/// total internal reflection handled, up to max_depth bounces. `Stages` (bits of Stage)
+/// compiles out what the scene does not use.
+template <unsigned Stages>
 glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                         std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
 
@@ -23,7 +31,12 @@ glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hi
 /// event estimation), then one scattering event chosen by albedo: cosine-weighted diffuse,
 /// mirror, or Fresnel-chosen reflection/refraction; Russian roulette after 3 bounces. No
 /// ambient term: indirect light replaces it.
+template <unsigned Stages>
 glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                      std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
+
+/// The shading function of `kind` compiled for `stages` (any subset of kAllStages).
+ShadeFn whitted_shader(unsigned stages);
+ShadeFn path_shader(unsigned stages);
 
 }  // namespace volley::render

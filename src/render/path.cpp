@@ -1,6 +1,8 @@
 // Path tracing for diffuse interreflection, next-event estimation to the point lights,
 // one scattering event per vertex chosen by albedo.
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include "render/integrator.h"
 #include "render/lighting.h"
@@ -10,14 +12,15 @@
 
 namespace volley::render {
 
+template <unsigned Stages>
 glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                      std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
   if (!hit.hit()) return path.weight * scene.background();
   const Ray& ray = path.ray;
   const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-  const SurfacePoint s = scene.surface(ray, hit);
+  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
   const io::Material& m = scene.materials()[s.material];
-  queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
+  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
   const glm::vec3 emitted = path.weight * m.emission;
   if (int(path.depth) >= max_depth) return emitted;
 
@@ -25,7 +28,10 @@ glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, 
   Rng& rng = out.rng;
   // Pick one event with probability albedo_i / max(sum, 1): absorption takes the rest,
   // and the weight albedo_i / P(i) keeps the estimate unbiased.
-  const float pd = luminance(m.diffuse), pm = luminance(m.mirror), pt = luminance(m.transmittance);
+  // Stages left out have zero albedo in every material of the scene.
+  const float pd = luminance(m.diffuse);
+  const float pm = (Stages & kMirrors) != 0 ? luminance(m.mirror) : 0.0f;
+  const float pt = (Stages & kRefraction) != 0 ? luminance(m.transmittance) : 0.0f;
   const float scale = std::max(pd + pm + pt, 1.0f);
   if (path.depth >= 3) {  // Russian roulette on the path throughput
     const float q = std::min(0.95f, std::max(out.weight.r, std::max(out.weight.g, out.weight.b)));
@@ -65,6 +71,18 @@ glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, 
   out.ray = spawn_ray(s.p, s.p_error, s.ng, w);
   next.push_back(out);
   return emitted;
+}
+
+namespace {
+template <std::size_t... S>
+constexpr std::array<ShadeFn, sizeof...(S)> path_table(std::index_sequence<S...>) {
+  return {&shade_path<unsigned(S)>...};
+}
+}  // namespace
+
+ShadeFn path_shader(unsigned stages) {
+  static constexpr auto table = path_table(std::make_index_sequence<kAllStages + 1>{});
+  return table[stages & kAllStages];
 }
 
 }  // namespace volley::render

@@ -14,6 +14,8 @@
 #include <tbb/task_arena.h>
 
 #include "render/path_state.h"
+#include "render/pipeline.h"
+#include "render/spawn.h"
 
 namespace volley::render {
 namespace {
@@ -33,7 +35,7 @@ glm::vec2 jitter(int sample, int spp, Rng& rng) {
 // Buffers of one tile, reused across samples and bounces.
 struct TileWork {
   std::vector<PathState> paths, next;
-  std::vector<ShadowQuery> shadows;
+  std::vector<ShadowQuery> shadows, passing;
   std::vector<Ray> rays;
   std::vector<Hit> hits;
   std::vector<std::uint8_t> blocked;
@@ -64,10 +66,44 @@ void trace_shadows(const Accel& accel, TileWork& w) {
     if (!w.blocked[i]) w.sum[w.shadows[i].pixel] += w.shadows[i].contribution;
 }
 
+// Shadow rays that may pass through transmissive surfaces (the refraction stage): traced
+// closest-hit; a transmissive hit attenuates the light by its transmittance and the ray
+// goes on from just past it toward the light; any other hit blocks it.
+void trace_shadows_through(const Scene& scene, TileWork& w) {
+  constexpr int kMaxSurfaces = 16;
+  for (int pass = 0; pass < kMaxSurfaces && !w.shadows.empty(); ++pass) {
+    const std::size_t n = w.shadows.size();
+    w.rays.resize(n);
+    w.hits.assign(n, Hit{});
+    for (std::size_t i = 0; i < n; ++i) w.rays[i] = w.shadows[i].ray;
+    w.stats.add(RayKind::shadow, n);
+    scene.accel().intersect(w.rays.data(), n, w.hits.data());
+    w.passing.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      ShadowQuery q = w.shadows[i];
+      if (!w.hits[i].hit()) {
+        w.sum[q.pixel] += q.contribution;
+        continue;
+      }
+      const SurfacePoint s = scene.surface_as<false>(q.ray, w.hits[i]);
+      const glm::vec3 t = scene.materials()[s.material].transmittance;
+      if (t == glm::vec3(0.0f)) continue;  // opaque: blocked
+      const glm::vec3 light(q.ray.org[0] + q.ray.dir[0], q.ray.org[1] + q.ray.dir[1], q.ray.org[2] + q.ray.dir[2]);
+      q.ray = spawn_shadow_ray(s.p, s.p_error, s.ng, light);
+      q.contribution *= t;
+      w.passing.push_back(q);
+    }
+    std::swap(w.shadows, w.passing);
+  }
+}
+
 void render_tile(const Scene& scene, const RenderOptions& options, int x0, int y0, TileWork& w, Image& image) {
   const core::Camera& camera = scene.camera();
   const int x1 = std::min(x0 + kTile, camera.width()), y1 = std::min(y0 + kTile, camera.height());
   w.sum.assign(kTile * kTile, glm::vec3(0.0f));
+  // The stages this render runs, chosen once: compile-time specialised shading.
+  const unsigned stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
+  const ShadeFn shade = options.integrator == IntegratorKind::path ? path_shader(stages) : whitted_shader(stages);
   for (int s = 0; s < options.spp; ++s) {
     // Camera rays in 4x4 pixel blocks.
     w.paths.clear();
@@ -91,12 +127,12 @@ void render_tile(const Scene& scene, const RenderOptions& options, int x0, int y
       w.shadows.clear();
       for (std::size_t i = 0; i < w.paths.size(); ++i) {
         const PathState& p = w.paths[i];
-        const glm::vec3 c = options.integrator == IntegratorKind::path
-                                ? shade_path(scene, p, w.hits[i], options.max_depth, w.next, w.shadows)
-                                : shade_whitted(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
-        w.sum[p.pixel] += c;
+        w.sum[p.pixel] += shade(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
       }
-      trace_shadows(scene.accel(), w);
+      if (stages & kRefraction)
+        trace_shadows_through(scene, w);
+      else
+        trace_shadows(scene.accel(), w);
       std::swap(w.paths, w.next);
     }
   }
@@ -140,6 +176,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         tbb::simple_partitioner());
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
   return result;
 }
 

@@ -19,6 +19,9 @@ struct RenderOptions {
   IntegratorKind integrator = IntegratorKind::whitted;
   std::uint64_t seed = 1;
   int threads = 0;             ///< 0 = all hardware threads
+  /// Run only the stages the scene needs (render/pipeline.h); false: the general pipeline,
+  /// which gives the same image, to measure what specialising saves.
+  bool specialize = true;
   /// Called now and then with the fraction of tiles done (from any thread, serialised).
   std::function<void(double)> progress;
 };
@@ -33,6 +36,7 @@ struct RenderResult {
   Image image;
   RayStats stats;
   double seconds = 0.0;  ///< wall time of the render loop (not scene loading or building)
+  unsigned stages = 0;   ///< pipeline stages that ran (bits of render::Stage)
 };
 
 /// Renders the scene through its camera (image size = the camera's).

@@ -96,7 +96,8 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   }
 }
 
-SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
+template <bool Smooth>
+SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
   SurfacePoint s;
   const glm::vec3 dir(ray.dir[0], ray.dir[1], ray.dir[2]);
   const std::size_t tri_count = indices_.size() / 3;
@@ -107,8 +108,13 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
     // Hit point from barycentrics, with pbrt's error bound (Pharr et al., 4th ed., 6.8).
     s.p = b0 * p0 + hit.u * p1 + hit.v * p2;
     s.p_error = gamma(7) * (glm::abs(b0 * p0) + glm::abs(hit.u * p1) + glm::abs(hit.v * p2));
+    // A ray leaving p tests this triangle with its vertices taken relative to the new
+    // origin: the test's own rounding grows with the farthest vertex (a wall 500 units
+    // long re-hit at t = -0 from 7e-5 off its plane without this term).
+    const glm::vec3 reach = glm::max(glm::abs(p0 - s.p), glm::max(glm::abs(p1 - s.p), glm::abs(p2 - s.p)));
+    s.p_error += glm::vec3(gamma(8) * std::max(reach.x, std::max(reach.y, reach.z)));
     s.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-    if (!corner_normals_.empty()) {
+    if (Smooth && !corner_normals_.empty()) {
       const glm::vec3* n = &corner_normals_[3 * hit.prim];
       s.ns = b0 * n[0] + hit.u * n[1] + hit.v * n[2];
       const float len = glm::length(s.ns);
@@ -133,5 +139,8 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
   if (glm::dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns;
   return s;
 }
+
+template SurfacePoint Scene::surface_as<true>(const Ray&, const Hit&) const;
+template SurfacePoint Scene::surface_as<false>(const Ray&, const Hit&) const;
 
 }  // namespace volley::render

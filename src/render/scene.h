@@ -50,7 +50,11 @@ class Scene {
   float extent() const { return extent_; }
 
   /// Shading data for a hit of `ray` (a hit, not a miss).
-  SurfacePoint surface(const Ray& ray, const Hit& hit) const;
+  SurfacePoint surface(const Ray& ray, const Hit& hit) const { return surface_as<true>(ray, hit); }
+  /// The same; with Smooth = false the shading normal is the geometric one (no
+  /// interpolation of per-corner normals, for scenes that have none).
+  template <bool Smooth>
+  SurfacePoint surface_as(const Ray& ray, const Hit& hit) const;
 
  private:
   Accel accel_;

@@ -1,5 +1,7 @@
 // Whitted-style ray tracing with the notes' Phong model, one bounce at a time.
+#include <array>
 #include <cmath>
+#include <utility>
 
 #include "render/integrator.h"
 #include "render/lighting.h"
@@ -8,15 +10,17 @@
 
 namespace volley::render {
 
+template <unsigned Stages>
 glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                         std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
   if (!hit.hit()) return path.weight * scene.background();
   const Ray& ray = path.ray;
   const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-  const SurfacePoint s = scene.surface(ray, hit);
+  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
   const io::Material& m = scene.materials()[s.material];
-  queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
-  if (int(path.depth) < max_depth) {
+  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
+  if constexpr ((Stages & (kMirrors | kRefraction)) != 0) {
+    if (int(path.depth) >= max_depth) return path.weight * (m.emission + m.ambient);
     auto spawn = [&](const glm::vec3& w, const glm::vec3& weight, RayKind kind) {
       next.push_back({spawn_ray(s.p, s.p_error, s.ng, w), path.weight * weight, path.pixel, path.depth + 1, kind, path.rng});
     };
@@ -24,8 +28,9 @@ glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hi
       const glm::vec3 r = reflect(d, s.ns);
       return glm::dot(r, s.ng) > 0.0f ? r : reflect(d, s.ng);  // shading normal bent it below
     };
-    if (m.mirror != glm::vec3(0.0f)) spawn(mirror_direction(), m.mirror, RayKind::reflection);
-    if (m.transmittance != glm::vec3(0.0f)) {
+    if constexpr ((Stages & kMirrors) != 0)
+      if (m.mirror != glm::vec3(0.0f)) spawn(mirror_direction(), m.mirror, RayKind::reflection);
+    if ((Stages & kRefraction) != 0 && m.transmittance != glm::vec3(0.0f)) {
       const float eta_i = s.front ? 1.0f : m.ior;
       const float eta_t = s.front ? m.ior : 1.0f;
       if (const auto t = refract(d, s.ns, eta_i, eta_t)) {
@@ -38,6 +43,18 @@ glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hi
     }
   }
   return path.weight * (m.emission + m.ambient);
+}
+
+namespace {
+template <std::size_t... S>
+constexpr std::array<ShadeFn, sizeof...(S)> whitted_table(std::index_sequence<S...>) {
+  return {&shade_whitted<unsigned(S)>...};
+}
+}  // namespace
+
+ShadeFn whitted_shader(unsigned stages) {
+  static constexpr auto table = whitted_table(std::make_index_sequence<kAllStages + 1>{});
+  return table[stages & kAllStages];
 }
 
 }  // namespace volley::render

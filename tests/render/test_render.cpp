@@ -9,6 +9,7 @@
 #include "io/png_writer.h"
 #include "io/scene_loader.h"
 #include "render/renderer.h"
+#include "render/pipeline.h"
 #include "render/spawn.h"
 
 namespace fs = std::filesystem;
@@ -133,4 +134,63 @@ TEST_CASE("render: spawned rays do not re-hit their own surface at scales 1e-3 .
     CHECK(spawned > 15000);
     CHECK(rehits == 0);
   }
+}
+
+TEST_CASE("render: specialised and general pipelines give the same image") {
+  // The general pipeline runs every stage (closest-hit shadow rays that pass through
+  // glass, mirror and refraction checks, normal interpolation); a scene without those
+  // features must come out bit-identical from the pipeline specialised to it.
+  for (const char* name : {"cornell-original.json", "polygons.json", "cornell.json"}) {
+    CAPTURE(name);
+    const io::SceneDesc desc = io::load_scene(kScenes / name, VOLLEY_SHARED_SCENES);
+    const render::Scene scene(desc, 40, 30, Options{});
+    render::RenderOptions ro;
+    ro.spp = 2;
+    ro.max_depth = desc.settings.max_depth;
+    ro.integrator = desc.settings.integrator == "path" ? render::IntegratorKind::path : render::IntegratorKind::whitted;
+    const auto special = render::render(scene, ro);
+    ro.specialize = false;
+    const auto general = render::render(scene, ro);
+    CHECK(special.image.pixels == general.image.pixels);
+    CHECK(general.stages == render::kAllStages);
+    CHECK(special.stages == render::needed_stages(scene.features()));
+  }
+  // What the Cornell box without glass or mirrors leaves out, and says so.
+  const io::SceneDesc desc = io::load_scene(kScenes / "cornell-original.json", VOLLEY_SHARED_SCENES);
+  const render::Scene scene(desc, 8, 8, Options{});
+  const unsigned stages = render::needed_stages(scene.features());
+  CHECK(stages == render::kShadows);
+  const std::string why = render::describe_skipped(stages, scene.features());
+  CHECK(why.find("reflection rays (no mirror materials)") != std::string::npos);
+  CHECK(why.find("any-hit") != std::string::npos);
+}
+
+TEST_CASE("render: a shadow ray leaving a long axis-aligned wall does not re-hit it") {
+  // Regression: a point on the plane x = 0 of a 560-unit wall, light far up and inside:
+  // the origin offset must cover the triangle test's rounding relative to the far
+  // vertices, or the wall is found again at t = -0.
+  io::SceneDesc desc;
+  desc.has_camera = true;
+  desc.camera.eye = {278, 273, -800};
+  desc.camera.target = {278, 273, 0};
+  desc.mesh.positions = {{0, 0, 559.2f}, {0, 0, 0}, {0, 548.8f, 0}, {0, 548.8f, 559.2f}};
+  desc.mesh.indices = {0, 1, 2, 0, 2, 3};
+  desc.mesh.material = {0, 0};
+  desc.materials.push_back(io::Material{});
+  desc.lights.push_back({{278, 400, 279.5f}, glm::vec3(1.0f)});
+  const render::Scene scene(desc, 16, 16, Options{});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> y(1.0f, 547.0f), z(1.0f, 558.0f);
+  int rehits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const glm::vec3 target(0.0f, y(rng), z(rng));
+    const glm::vec3 org(100.0f, 273.0f, -100.0f);
+    const glm::vec3 d = target - org;
+    const Ray ray{{org.x, org.y, org.z}, 0.0f, {d.x, d.y, d.z}, INFINITY};
+    const Hit hit = scene.accel().intersect(ray);
+    REQUIRE(hit.hit());
+    const render::SurfacePoint s = scene.surface(ray, hit);
+    rehits += scene.accel().occluded(render::spawn_shadow_ray(s.p, s.p_error, s.ng, scene.lights()[0].position));
+  }
+  CHECK(rehits == 0);
 }
