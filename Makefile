@@ -4,14 +4,14 @@ PRESET ?= release
 BUILD  := build/$(PRESET)
 JOBS   ?= $(shell nproc)
 
-# Required to build; the optional ones enable the Embree side-by-side, plots and
-# instruction-count benchmarks.
+# Required to build; the optional ones enable the Embree side-by-side, plots,
+# instruction-count benchmarks and the perf/ scripts (python3).
 DEPS     := cmake g++ make pkg-config libxsimd-dev libbenchmark-dev libglm-dev libstb-dev \
             doctest-dev libtinyobjloader-dev nlohmann-json3-dev libtbb-dev libcli11-dev
-OPTIONAL := libembree-dev gnuplot-nox valgrind
+OPTIONAL := libembree-dev gnuplot-nox valgrind python3
 SUDO     := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps build test demo bench clean
+.PHONY: deps build test demo bench perf perf-icount perf-plot clean
 
 deps:
 	@missing=$$(for p in $(DEPS) $(OPTIONAL); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
@@ -30,8 +30,23 @@ test: build
 demo: build
 	$(BUILD)/volley render scenes/cornell.json -o out/cornell.png
 
+# Benchmarks and regression tracking (perf/README.md). bench: every suite once, short
+# (1 repetition), recorded in perf/results/ and perf/history.csv, shown against the
+# committed baseline (no verdicts from one repetition). perf: the full timing run (5
+# repetitions) with verdicts; it fails on a tracked regression. perf-icount: instruction
+# counts under callgrind, deterministic; fails on a tracked regression. perf-plot:
+# perf/history.png from perf/history.csv.
 bench: build
-	$(BUILD)/volley_bench --benchmark_out=out/bench.json --benchmark_out_format=json
+	perf/run --quick --build-dir $(BUILD) --compare perf/baselines/timing.json
+
+perf: build
+	perf/run --build-dir $(BUILD) --compare perf/baselines/timing.json
+
+perf-icount: build
+	perf/run --callgrind --build-dir $(BUILD) --compare perf/baselines/icount.json
+
+perf-plot:
+	perf/plot
 
 clean:
 	rm -rf build out
