@@ -14,6 +14,10 @@
 // unchanged and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`.
 // The running bounds themselves are never NaN (NaN tmin / tmax rays are rejected first).
 // Inert children (lo = +inf, hi = -inf) fail for every ray.
+// One exception, the single-ray walk: its far distances are (plane - org) * fl(inv * pad),
+// the padding folded into the reciprocal once per ray (same rounding bound, one multiply
+// less per node; see walk). It may differ from the oracle by an ulp on a box's exit, never
+// by culling a box the exact ray meets; the triangle answers are the same.
 #pragma once
 #include <immintrin.h>
 
@@ -284,8 +288,13 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
   const auto ix = V8::set1(inv[0]), iy = V8::set1(inv[1]), iz = V8::set1(inv[2]);
   const auto tmin = V8::set1(ray.tmin);
-  const auto pad = V8::set1(core::kSlabExitPad);
   const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
+  // Far distances use the reciprocal times the exit padding, rounded once per ray:
+  // fl(d * fl(inv * pad)) carries the same (1 + eps)^2 bound around d * inv * pad as the
+  // oracle's fl(fl(d * inv) * pad), so the 2 gamma(3) margin still covers the rounding of
+  // both ends (the padding was sized for the sub, reciprocal and product roundings), and
+  // the node test loses a multiply from its longest dependency chain. ±inf stays ±inf.
+  const auto fix = V8::set1(inv[0] * pad1), fiy = V8::set1(inv[1] * pad1), fiz = V8::set1(inv[2] * pad1);
 
   // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
   float tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
@@ -294,19 +303,21 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   int size = 0;
   bool found = false;
   std::uint32_t ref = start;
+  const WideNode<N>* const nodes = bvh.nodes;  // not reloaded after each leaf call
+  const Block* const all_blocks = bvh.blocks;
   for (;;) {
     if (!(ref & wide_ref::kLeafBit)) {
       // Interior: slab test of all eight children at once.
-      const WideNode<N>& node = bvh.nodes[ref];
+      const WideNode<N>& node = nodes[ref];
+      // The child references sit on the node's fourth cache line, read only after the slab
+      // test: request it now, beside the three lines of boxes.
+      _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);
       const auto tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
       const auto tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
       const auto tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
-      auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), ix);
-      auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), iy);
-      auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), iz);
-      // The padding applied to each far distance before the min: rounding is monotone, so
-      // min(fl(a p), fl(b p)) = fl(min(a, b) p) bit for bit, one step less on the chain.
-      if constexpr (Robust) tfx = V8::mul(tfx, pad), tfy = V8::mul(tfy, pad), tfz = V8::mul(tfz, pad);
+      const auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), fix);
+      const auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), fiy);
+      const auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), fiz);
       typename V8::V entry, exit;
       if constexpr (NoZero) {
         // No NaN distance: combine as a tree.
@@ -317,6 +328,13 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, tmax8)));
       }
       std::uint32_t bits = V8::le(entry, exit);
+      if (AnyHit && bits != 0) {
+        // Any hit: no ordering and no distances (the stack entries are never pruned): the
+        // first hit child next, the others on the stack.
+        ref = node.child[std::countr_zero(bits)];
+        for (bits &= bits - 1; bits != 0; bits &= bits - 1) stack[size++].ref = node.child[std::countr_zero(bits)];
+        continue;
+      }
       if (bits != 0) {
         alignas(32) float dist[8];
         V8::store(dist, entry);
@@ -329,11 +347,13 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         const int j = std::countr_zero(bits);
         bits &= bits - 1;
         if (bits == 0) {
-          // Two children: the nearer next, the other on the stack.
+          // Two children: the nearer next, the other on the stack (selects, not a branch:
+          // which one is nearer is a coin toss to the predictor).
           const bool swap = dist[j] < dist[i];
-          const int near = swap ? j : i, far = swap ? i : j;
-          stack[size++] = {node.child[far], dist[far]};
-          ref = node.child[near];
+          const std::uint32_t ci = node.child[i], cj = node.child[j];
+          const float di = dist[i], dj = dist[j];
+          stack[size++] = {swap ? ci : cj, swap ? di : dj};
+          ref = swap ? cj : ci;
           continue;
         }
         // Three or more: push all, sort the pushed run far to near (insertion sort of at
@@ -345,13 +365,11 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
           const int k = std::countr_zero(bits);
           stack[size++] = {node.child[k], dist[k]};
         }
-        if constexpr (!AnyHit) {
-          for (int a = base + 1; a < size; ++a) {
-            const detail::WideStackItem<Arch> item = stack[a];
-            int b = a;
-            for (; b > base && stack[b - 1].entry < item.entry; --b) stack[b] = stack[b - 1];
-            stack[b] = item;
-          }
+        for (int a = base + 1; a < size; ++a) {
+          const detail::WideStackItem<Arch> item = stack[a];
+          int b = a;
+          for (; b > base && stack[b - 1].entry < item.entry; --b) stack[b] = stack[b - 1];
+          stack[b] = item;
         }
         ref = stack[--size].ref;
         continue;
@@ -359,7 +377,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
     } else {
       // Leaf: its blocks, closest hit (lowers tmax) or any hit (ends the walk).
       const std::uint32_t count = (ref >> wide_ref::kCountShift) & wide_ref::kCountMask;
-      const Block* blocks = bvh.blocks + (ref & wide_ref::kFirstMask);
+      const Block* blocks = all_blocks + (ref & wide_ref::kFirstMask);
       if constexpr (AnyHit) {
         if (count != 0 && Leaf::occluded(pr, blocks, count)) return true;
       } else if (count != 0) {
