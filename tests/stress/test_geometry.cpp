@@ -1,0 +1,498 @@
+// Numerical stress suite (ACCURACY.md, stress catalogue) — hard geometry, every ISA this CPU
+// has plus the scalar oracle, every query mode (single, packets of 4/8/16, stream):
+//   3  axis-aligned rays (±0.0 components) on an integer heightfield, integer and
+//      half-integer positions: no miss, no NaN (watertight); double-fallback frequency
+//   4  flat boxes (axis-aligned triangles), rays running in slab planes with zero
+//      direction components: the hit is found
+//   6  grazing rays (0.1° .. 1e-4°) on skinny triangles (aspect 1e3 .. 1e5) against a
+//      double reference: hit/miss agree where the answer is well conditioned, t bounded
+//   7  degenerate triangles mixed into a mesh: never hit, never NaN, the rest unchanged
+//   9  tiny triangles (edges 1e-6 .. 1e-20): a ray at an interior point hits; FTZ/DAZ
+//   13 every case: the same hit/miss as the scalar oracle's single rays, ray by ray
+//   14 the generators assert the signs and magnitudes they claim to produce
+// and the t error of random rays against a double reference (median, p99.9, max).
+// VOLLEY_STRESS_LONG=1 runs many more rays per case (see stress_util.h).
+#include <doctest/doctest.h>
+
+#include <xmmintrin.h>
+
+#include <algorithm>
+#include <optional>
+#include <random>
+#include <sstream>
+
+#include "simd/watertight_stats.h"
+#include "stress_util.h"
+
+using namespace stress;
+
+namespace {
+
+/// Traces `rays` through `mesh` for every test × ISA × mode; calls check(test, isa, mode,
+/// answers) and counts hit/miss disagreements with the scalar oracle's single rays (item 13).
+/// `excused`: a test whose cross-ISA disagreements are only reported (see the skipped case
+/// below that pins them), not checked.
+template <class Check>
+void for_each_config(const Mesh& mesh, const std::vector<Ray>& rays, const std::string& what, Check check,
+                     std::optional<TriangleTest> excused = std::nullopt) {
+  for (TriangleTest test : kTests) {
+    std::vector<Hit> oracle;
+    for (Isa isa : isas()) {
+      const Accel accel = mesh.accel(test, isa);
+      for (Mode mode : kModes) {
+        const Answers a = trace(accel, rays, mode);
+        if (oracle.empty()) oracle = a.hits;
+        std::size_t disagree = 0, nan = 0, occ_mismatch = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          disagree += a.hits[i].hit() != oracle[i].hit();
+          nan += std::isnan(a.hits[i].t) || std::isnan(a.hits[i].u) || std::isnan(a.hits[i].v);
+          occ_mismatch += a.hits[i].hit() != bool(a.occluded[i]);
+        }
+        INFO(what, ": ", name(test), " ", name(isa), " ", name(mode));
+        if (excused == test) {
+          if (disagree != 0 && mode == Mode::single)
+            MESSAGE(what, ": ", name(test), " ", name(isa), " hit/miss differs from the scalar oracle in ", disagree,
+                    " of ", rays.size(), " rays (see the skipped stress 13 case)");
+        } else {
+          CHECK(disagree == 0);
+        }
+        CHECK(nan == 0);
+        CHECK(occ_mismatch == 0);
+        check(test, isa, mode, a);
+      }
+    }
+  }
+}
+
+std::size_t misses(const Answers& a) {
+  std::size_t n = 0;
+  for (const Hit& h : a.hits) n += !h.hit();
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("stress 3/13/14: axis-aligned rays with signed zeros on an integer heightfield") {
+  const int n = long_mode() ? 64 : 16;
+  std::mt19937 rng(3);
+  Mesh mesh;
+  std::vector<int> height((n + 1) * (n + 1));
+  for (int& h : height) h = static_cast<int>(rng() % 4);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) mesh.vertex(i, j, height[i * (n + 1) + j]);
+  const auto v = [&](int i, int j) { return static_cast<std::uint32_t>(i * (n + 1) + j); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if ((i + j) % 2) mesh.triangle(v(i, j), v(i + 1, j), v(i + 1, j + 1)), mesh.triangle(v(i, j), v(i + 1, j + 1), v(i, j + 1));
+      else mesh.triangle(v(i, j), v(i + 1, j), v(i, j + 1)), mesh.triangle(v(i + 1, j), v(i + 1, j + 1), v(i, j + 1));
+    }
+  // Down from above and up from below, every integer and half-integer point strictly inside,
+  // every sign combination of the zero components.
+  std::vector<Ray> rays;
+  Coverage cx, cy, cz;
+  for (int i = 1; i < 2 * n; ++i)
+    for (int j = 1; j < 2 * n; ++j)
+      for (float zx : {0.0f, -0.0f})
+        for (float zy : {0.0f, -0.0f})
+          for (float up : {1.0f, -1.0f}) {
+            const float o[3] = {0.5f * i, 0.5f * j, up > 0 ? -10.0f : 10.0f}, d[3] = {zx, zy, up};
+            rays.push_back(make_ray(o, d));
+            cx.add(zx), cy.add(zy), cz.add(up);
+          }
+  CHECK((cx.pos_zero && cx.neg_zero && cy.pos_zero && cy.neg_zero && cz.positive && cz.negative));
+  CHECK(!cx.positive);
+  CHECK(!cx.negative);
+  const std::uint64_t fallback_before = volley::simd::watertight_fallback_lanes;
+  for_each_config(mesh, rays, "heightfield", [&](TriangleTest test, Isa isa, Mode mode, const Answers& a) {
+    if (test == TriangleTest::watertight) {
+      CHECK_MESSAGE(misses(a) == 0, "heightfield watertight ", name(isa), " ", name(mode));
+    } else if (mode == Mode::single) {
+      MESSAGE("heightfield ", name(test), " ", name(isa), ": ", misses(a), " of ", rays.size(), " axis-aligned rays miss");
+    }
+    // The hit distance is exact: the height at an integer or half-integer point of an
+    // integer heightfield is a multiple of 1/4 at most, t = 10 -/+ height.
+    std::size_t inexact = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i)
+      if (a.hits[i].hit()) inexact += a.hits[i].t * 4.0f != std::floor(a.hits[i].t * 4.0f);
+    if (test == TriangleTest::watertight) CHECK(inexact == 0);
+  });
+  MESSAGE("heightfield: watertight double fallback in ", volley::simd::watertight_fallback_lanes - fallback_before,
+          " SIMD lanes over all ISAs and modes (", rays.size(), " rays each)");
+}
+
+TEST_CASE("stress 4/13/14: flat boxes hit by rays running in slab planes with zero direction components") {
+  // Separate axis-aligned right triangles (each its own flat box) on a grid at several
+  // depths, facing each of the three axes; rays along the facing axis (other components ±0)
+  // at the triangles' vertices and edge midpoints: the ray runs exactly in two slab planes of
+  // the leaf box (x = xmin and y = ymin at the corner vertex, ...).
+  Mesh mesh;
+  std::vector<Ray> rays;
+  const int g = long_mode() ? 32 : 8;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < g; ++i)
+      for (int j = 0; j < g; ++j) {
+        const float depth = to_float((i * 7 + j * 3) % 5) - 2.0f;
+        const auto put = [&](float a, float b) {
+          float p[3];
+          p[axis] = depth, p[(axis + 1) % 3] = a, p[(axis + 2) % 3] = b;
+          return mesh.vertex(p[0], p[1], p[2]);
+        };
+        const float a0 = 2.0f * i + 100.0f * axis, b0 = 2.0f * j;
+        mesh.triangle(put(a0, b0), put(a0 + 1, b0), put(a0, b0 + 1));
+        for (const auto& [a, b] : {std::pair{a0, b0}, {a0 + 1, b0}, {a0, b0 + 1}, {a0 + 0.5f, b0}, {a0, b0 + 0.5f},
+                                   {a0 + 0.5f, b0 + 0.5f}, {a0 + 0.25f, b0 + 0.25f}})
+          for (float s : {1.0f, -1.0f})
+            for (float z : {0.0f, -0.0f}) {
+              float o[3], d[3];
+              o[axis] = -10.0f * s, o[(axis + 1) % 3] = a, o[(axis + 2) % 3] = b;
+              d[axis] = s, d[(axis + 1) % 3] = z, d[(axis + 2) % 3] = -z;
+              rays.push_back(make_ray(o, d));
+            }
+      }
+  for_each_config(mesh, rays, "flat boxes", [&](TriangleTest test, Isa isa, Mode mode, const Answers& a) {
+    if (test == TriangleTest::watertight)
+      CHECK_MESSAGE(misses(a) == 0, "flat boxes watertight ", name(isa), " ", name(mode));
+    else if (mode == Mode::single)
+      MESSAGE("flat boxes ", name(test), " ", name(isa), ": ", misses(a), " of ", rays.size(), " miss (edge and vertex rays)");
+  });
+}
+
+namespace {
+
+/// One grazing configuration: a skinny triangle (length 1, width 1/aspect, random
+/// orientation, float vertices) and rays meeting its plane at `degrees` from distance 0.5,
+/// aimed at targets inside it (a third) and outside (barycentrics ±10^[-2, 3]).
+struct Grazing {
+  double aspect = 0, degrees = 0, sin_g = 0;
+  Mesh mesh;
+  std::vector<Ray> rays;
+};
+
+std::vector<Grazing> grazing_cases() {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const double kPi = 3.14159265358979323846;
+  const int per = long_mode() ? 20000 : 300;
+  std::vector<Grazing> out;
+  for (double aspect : {1e3, 1e4, 1e5}) {
+    const double th = 2 * kPi * u01(rng), ph = kPi * u01(rng);
+    const std::array<double, 3> ax{std::cos(th) * std::sin(ph), std::sin(th) * std::sin(ph), std::cos(ph)};
+    std::array<double, 3> by{-ax[1], ax[0], 0.0};
+    const double bl = std::hypot(by[0], by[1]);
+    for (double& c : by) c /= bl;
+    const std::array<double, 3> nz{ax[1] * by[2] - ax[2] * by[1], ax[2] * by[0] - ax[0] * by[2], ax[0] * by[1] - ax[1] * by[0]};
+    Mesh mesh;
+    const auto at = [&](double a, double b) {
+      return mesh.vertex(0.3 + a * ax[0] + b * by[0], -0.2 + a * ax[1] + b * by[1], 0.1 + a * ax[2] + b * by[2]);
+    };
+    mesh.triangle(at(0, 0), at(1, 0), at(0.5, 1.0 / aspect));
+    const auto p0 = mesh.position(0), p1 = mesh.position(1), p2 = mesh.position(2);
+    for (double degrees : {1.0, 0.1, 1e-2, 1e-3, 1e-4}) {  // 1 degree: a well-conditioned control
+      Grazing g;
+      g.aspect = aspect, g.degrees = degrees, g.mesh = mesh;
+      g.sin_g = std::sin(degrees * kPi / 180.0);
+      const double cos_g = std::cos(degrees * kPi / 180.0);
+      for (int k = 0; k < per; ++k) {
+        double b1, b2;
+        if (k % 3 == 0) {  // inside
+          b1 = u01(rng), b2 = u01(rng);
+          if (b1 + b2 > 1) b1 = 1 - b1, b2 = 1 - b2;
+        } else {  // outside, at distances over five decades
+          b1 = (rng() % 2 ? 1 : -1) * std::pow(10.0, -2 + 5 * u01(rng));
+          b2 = (rng() % 2 ? 1 : -1) * std::pow(10.0, -2 + 5 * u01(rng));
+        }
+        const double w = 1.0 - b1 - b2;
+        std::array<double, 3> tp{};
+        for (int c = 0; c < 3; ++c) tp[c] = w * p0[c] + b1 * p1[c] + b2 * p2[c];
+        const double hd = 2 * kPi * u01(rng), side = (k % 2) ? 1.0 : -1.0;
+        float d[3], o[3];
+        for (int c = 0; c < 3; ++c) {
+          const double dc = cos_g * (std::cos(hd) * ax[c] + std::sin(hd) * by[c]) - side * g.sin_g * nz[c];
+          d[c] = to_float(dc);
+          o[c] = to_float(tp[c] - 0.5 * dc);
+        }
+        g.rays.push_back(make_ray(o, d));
+      }
+      out.push_back(std::move(g));
+    }
+  }
+  return out;
+}
+
+
+/// Stress 6 on every configuration of grazing_cases(). With `moller_strict` false, the SIMD
+/// Moller-Trumbore kernels' disagreements (with the oracle and with the reference) are only
+/// reported: see the skipped case below.
+void check_grazing(bool moller_strict) {
+  // Condition: rounding inside any of the tests perturbs the inputs by ~eps relative, which
+  // moves the ray's crossing with the plane by up to ~eps |o - p| / sin(angle) along the
+  // plane, i.e. by up to cond = eps aspect / sin(angle) in barycentrics across the skinny
+  // side (|o - p| ~ 1 here), more the farther the crossing lies from the triangle, and t by
+  // a similar amount (measured: t errors stay below 0.05 cond). Hit/miss must agree with the
+  // double reference where its barycentrics are farther than margin x cond x (1 + |u| + |v|)
+  // from an edge and its t is farther than that from 0 (margin 16, and 64 for the plane
+  // test, whose rounding is larger: both set with VOLLEY_STRESS_LONG=1, 20000 rays per
+  // configuration); a t more than 64 cond from the reference's (or negative, or not finite)
+  // is absurd.
+  constexpr double kEps = 0x1p-24;
+  const auto margin_of = [](TriangleTest test) { return test == TriangleTest::plane ? 64.0 : 16.0; };
+  Coverage angle_cov, aspect_cov, bary_cov;
+  std::size_t total_in = 0, total_out = 0;
+  for (const Grazing& g : grazing_cases()) {
+    angle_cov.add(g.degrees), aspect_cov.add(g.aspect);
+    const auto p0 = g.mesh.position(0), p1 = g.mesh.position(1), p2 = g.mesh.position(2);
+    const double cond = kEps * g.aspect / g.sin_g;
+    std::ostringstream what;
+    what << "grazing " << g.degrees << " deg, aspect " << g.aspect;
+    std::size_t clear_in = 0, clear_out = 0;
+    for (const Ray& r : g.rays) {
+      const RefHit h = reference(r, p0, p1, p2);
+      REQUIRE(h.ok);
+      bary_cov.add(h.u);
+      const double scale = 1 + std::fabs(h.u) + std::fabs(h.v);
+      clear_in += h.inside(16 * cond * scale) && h.t > 16 * cond * scale;
+      clear_out += !h.inside(-16 * cond * scale) || h.t < -16 * cond * scale;
+    }
+    total_in += clear_in, total_out += clear_out;
+    const auto check = [&](TriangleTest test, Isa isa, Mode mode, const Answers& a) {
+      std::size_t wrong = 0, absurd = 0;
+      double worst = 0;
+      for (std::size_t i = 0; i < g.rays.size(); ++i) {
+        const RefHit r = reference(g.rays[i], p0, p1, p2);
+        const double m = margin_of(test) * (1 + std::fabs(r.u) + std::fabs(r.v));
+        const bool in = r.inside(m * cond) && r.t > m * cond, out = !r.inside(-m * cond) || r.t < -m * cond;
+        wrong += (in && !a.hits[i].hit()) || (out && a.hits[i].hit());
+        if (a.hits[i].hit()) {
+          const double t = a.hits[i].t, err = std::fabs(t - r.t) / r.t;
+          worst = std::max(worst, err / cond);
+          absurd += !(t >= 0 && std::isfinite(t) && err <= 64 * cond);
+        }
+      }
+      INFO(what.str(), " ", name(test), " ", name(isa), " ", name(mode));
+      if (moller_strict || test != TriangleTest::moller || isa == Isa::scalar) {
+        CHECK(wrong == 0);
+        CHECK(absurd == 0);
+      } else if ((wrong != 0 || absurd != 0) && mode == Mode::single) {
+        MESSAGE(what.str(), " moller ", name(isa), ": ", wrong, " well-conditioned rays disagree with the double "
+                "reference, ", absurd, " absurd t (see the skipped stress 13 case)");
+      }
+      if (isa == Isa::scalar && mode == Mode::single)
+        MESSAGE(what.str(), " ", name(test), ": ", clear_in, " clearly inside, ", clear_out, " clearly outside of ",
+                g.rays.size(), "; ", g.rays.size() - misses(a), " hits, max t error ", worst,
+                " x eps aspect / sin(angle)");
+    };
+    if (moller_strict)
+      for_each_config(g.mesh, g.rays, what.str(), check);
+    else
+      for_each_config(g.mesh, g.rays, what.str(), check, TriangleTest::moller);
+  }
+  CHECK(total_in > 0);
+  CHECK(total_out > 0);
+  CHECK(angle_cov.min_decade == -4);
+  CHECK(angle_cov.max_decade == 0);
+  CHECK(aspect_cov.min_decade == 3);
+  CHECK(aspect_cov.max_decade == 5);
+  CHECK((bary_cov.negative && bary_cov.positive && bary_cov.min_decade <= -2 && bary_cov.max_decade >= 2));
+}
+
+}  // namespace
+
+TEST_CASE("stress 6/13/14: grazing rays on skinny triangles agree with a double reference") {
+  check_grazing(false);
+}
+
+// Found by this suite: on grazing rays the SIMD Moller-Trumbore kernels (SSE4.2, AVX2 and
+// AVX-512 alike, so not FMA) give a different hit/miss than the scalar oracle for 5-29 of 300
+// rays per configuration, hits on rays the double reference puts clearly outside the
+// triangle (1-10 of 300 at 1e-3 .. 1e-4 degrees; the scalar oracle has none), and with
+// VOLLEY_STRESS_LONG=1 absurd t (beyond 64 x the conditioning bound; 1-9 of 20000 per
+// configuration, never in the scalar oracle); the kernel tests
+// claim the SIMD kernels are bit-identical to the oracle. Skipped until the order of
+// operations of simd/moller.h and core/triangle_moller.h is reconciled; the case above checks
+// everything else (plane and watertight in full, moller's scalar oracle, no absurd t).
+TEST_CASE("stress 13: SIMD Moller-Trumbore gives the oracle's hit/miss on grazing rays" * doctest::skip()) {
+  check_grazing(true);
+}
+
+TEST_CASE("stress 7/13: degenerate triangles in a mesh are never hit and never give NaN") {
+  // A floor (two triangles at z = 0) under many degenerate triangles at z = 1 .. 2: repeated
+  // vertices, all three equal, collinear (exact midpoint), collinear far from the origin.
+  Mesh mesh;
+  mesh.triangle(mesh.vertex(-10, -10, 0), mesh.vertex(10, -10, 0), mesh.vertex(10, 10, 0));
+  mesh.triangle(mesh.vertex(-10, -10, 0), mesh.vertex(10, 10, 0), mesh.vertex(-10, 10, 0));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-8, 8);
+  std::vector<std::array<float, 3>> aims;
+  for (int k = 0; k < 200; ++k) {
+    const float x = u(rng), y = u(rng), z = 1.0f + 0.005f * k;
+    const float x2 = x + 1.0f, y2 = y + 0.5f;
+    const std::uint32_t a = mesh.vertex(x, y, z), b = mesh.vertex(x2, y2, z), m = mesh.vertex(0.5 * (x + x2), 0.5 * (y + y2), z);
+    switch (k % 4) {
+      case 0: mesh.triangle(a, a, b); break;  // repeated vertex
+      case 1: mesh.triangle(a, a, a); break;  // a point
+      case 2: mesh.triangle(a, m, b); break;  // collinear
+      case 3: mesh.triangle(b, a, m); break;
+    }
+    aims.push_back({x, y, z}), aims.push_back({0.5f * (x + x2), 0.5f * (y + y2), z}), aims.push_back({x2, y2, z});
+  }
+  std::vector<Ray> rays;
+  for (const auto& p : aims)
+    for (const auto& o : {std::array<float, 3>{p[0], p[1], 5.0f}, std::array<float, 3>{0.25f, -0.5f, 4.0f}}) {
+      const float d[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]};
+      rays.push_back(make_ray(o.data(), d));
+    }
+  // Rays along the collinear segments too (in their line).
+  for (std::size_t k = 0; k + 2 < aims.size(); k += 3) {
+    const auto& a = aims[k];
+    const auto& b = aims[k + 2];
+    const float o[3] = {2 * a[0] - b[0], 2 * a[1] - b[1], a[2]}, d[3] = {b[0] - a[0], b[1] - a[1], 0.0f};
+    rays.push_back(make_ray(o, d));
+  }
+  for_each_config(mesh, rays, "degenerate", [&](TriangleTest, Isa, Mode, const Answers& a) {
+    std::size_t on_degenerate = 0;
+    for (const Hit& h : a.hits) on_degenerate += h.hit() && h.prim >= 2;
+    CHECK(on_degenerate == 0);
+  });
+  CHECK(mesh.accel(TriangleTest::watertight, Isa::scalar).info().degenerate == 200);
+}
+
+TEST_CASE("stress 9/13/14: a ray at an interior point of a tiny triangle hits without FTZ/DAZ") {
+  Coverage sizes;
+  std::ostringstream report;
+  for (float where : {0.0f, 1.0f}) {
+    for (int e = 6; e <= 30; e += 2) {
+      const float s = to_float(std::pow(10.0, -e));
+      const bool contract = e <= 20 && (where == 0.0f || e <= 6);  // float can resolve it (see below)
+      if (contract) sizes.add(std::pow(10.0, -e));
+      Mesh mesh;
+      // Right triangle with legs s at (where, where, where); the ray aims at (s/4, s/4) from
+      // the triangle (exact: a power-of-two multiple of s), straight down and obliquely.
+      mesh.triangle(mesh.vertex(where, where, where), mesh.vertex(double(where) + s, where, where),
+                    mesh.vertex(where, double(where) + s, where));
+      const float px = where + 0.25f * s, py = where + 0.25f * s;
+      // From distance ~4 s (the scale of the triangle: what must work) and, for the record,
+      // from distance ~1 (where a triangle smaller than the float spacing of |o - v| ~ 6e-8
+      // cannot be resolved by tests that translate vertices to the origin first).
+      std::vector<Ray> rays, far_rays;
+      for (const auto& d : {std::array<float, 3>{0.0f, 0.0f, -1.0f}, std::array<float, 3>{0.3f, -0.2f, -1.0f},
+                            std::array<float, 3>{-0.6f, 0.7f, -0.5f}}) {
+        const float k = where == 0.0f ? 4.0f * s : 1.0f;
+        const float o[3] = {px - k * d[0], py - k * d[1], where - k * d[2]};
+        const float dk[3] = {k * d[0], k * d[1], k * d[2]};
+        rays.push_back(make_ray(o, dk));
+        const float of[3] = {px - d[0], py - d[1], where - d[2]};
+        far_rays.push_back(make_ray(of, d.data()));
+      }
+      std::ostringstream line;
+      line << "tiny s=1e-" << e << " at " << where << ":";
+      for (TriangleTest test : kTests) {
+        std::size_t hits = 0, hits_ftz = 0, total = 0, far_hits = 0;
+        for (Isa isa : isas()) {
+          const Accel accel = mesh.accel(test, isa);
+          for (Mode mode : kModes) {
+            const Answers a = trace(accel, rays, mode);
+            total += rays.size();
+            hits += rays.size() - misses(a);
+            for (const Hit& h : a.hits) CHECK(!std::isnan(h.t));
+            // Same with flush-to-zero and denormals-are-zero on this thread.
+            const unsigned csr = _mm_getcsr();
+            _mm_setcsr(csr | 0x8040u);
+            const Answers f = trace(accel, rays, mode);
+            _mm_setcsr(csr);
+            hits_ftz += rays.size() - misses(f);
+            far_hits += far_rays.size() - misses(trace(accel, far_rays, mode));
+          }
+        }
+        line << " " << name(test) << " " << hits << "/" << total << " (FTZ/DAZ " << hits_ftz << ", from distance 1: "
+             << far_hits << ")";
+        if (contract && test == TriangleTest::watertight) CHECK_MESSAGE(hits == total, line.str());
+      }
+      report << line.str() << "\n";
+    }
+  }
+  MESSAGE("tiny triangles (hits / rays over ISAs x modes, rays from distance 4 s; watertight must hit for edges "
+          ">= 1e-20 at the origin, and at 1.0 only while the edge is >= ~1e-7, the float spacing there):\n"
+          << report.str());
+  CHECK(sizes.min_decade == -20);
+  CHECK(sizes.max_decade == -6);
+}
+
+namespace {
+
+/// t errors of random rays against a double reference on 500 random triangles moved by each
+/// offset; CHECKs the median for the tests in `tests`.
+void t_error(std::initializer_list<float> offsets, std::initializer_list<TriangleTest> tests) {
+  constexpr double kMedianBound = 1e-7;
+  const int n_rays = long_mode() ? 1000000 : 20000;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (float offset : offsets) {
+    // 500 random triangles of size ~0.1..1 in a unit box, moved by offset.
+    Mesh mesh;
+    for (int k = 0; k < 500; ++k) {
+      const double cx = u(rng), cy = u(rng), cz = u(rng), s = 0.1 + 0.9 * u(rng);
+      const std::uint32_t a = mesh.vertex(offset + cx, offset + cy, offset + cz);
+      const std::uint32_t b = mesh.vertex(offset + cx + s * (u(rng) - 0.5), offset + cy + s * (u(rng) - 0.5), offset + cz + s * (u(rng) - 0.5));
+      const std::uint32_t c = mesh.vertex(offset + cx + s * (u(rng) - 0.5), offset + cy + s * (u(rng) - 0.5), offset + cz + s * (u(rng) - 0.5));
+      mesh.triangle(a, b, c);
+    }
+    std::vector<Ray> rays;
+    Coverage dir_cov;
+    for (int k = 0; k < n_rays; ++k) {
+      const std::uint32_t t = static_cast<std::uint32_t>(rng() % mesh.triangles());
+      const double b1 = 0.1 + 0.4 * u(rng), b2 = 0.1 + 0.4 * u(rng);
+      float o[3], d[3];
+      for (int c = 0; c < 3; ++c) {
+        const double p = (1 - b1 - b2) * mesh.position(mesh.idx[3 * t])[c] + b1 * mesh.position(mesh.idx[3 * t + 1])[c] +
+                         b2 * mesh.position(mesh.idx[3 * t + 2])[c];
+        o[c] = to_float(offset + 3.0 * u(rng) - 1.0);
+        d[c] = to_float(p - double(o[c]));
+        dir_cov.add(d[c]);
+      }
+      rays.push_back(make_ray(o, d));
+    }
+    CHECK((dir_cov.negative && dir_cov.positive));
+    for (TriangleTest test : tests)
+      for (Isa isa : isas()) {
+        const Accel accel = mesh.accel(test, isa);
+        for (Mode mode : {Mode::single, Mode::packet16, Mode::stream}) {
+          const Answers a = trace(accel, rays, mode);
+          std::vector<double> err;
+          for (std::size_t i = 0; i < rays.size(); ++i) {
+            const Hit& h = a.hits[i];
+            if (!h.hit()) continue;
+            const std::uint32_t* f = &mesh.idx[3 * h.prim];
+            const RefHit r = reference(rays[i], mesh.position(f[0]), mesh.position(f[1]), mesh.position(f[2]));
+            // Origins and vertices are quantized far from 0 (1/16 at 1e6): an origin can lie
+            // in a triangle's plane (t = 0), where a relative error means nothing.
+            if (r.ok && std::fabs(r.t) > 1e-3) err.push_back(std::fabs(double(h.t) - r.t) / std::fabs(r.t));
+          }
+          REQUIRE(err.size() > rays.size() / 2);
+          std::sort(err.begin(), err.end());
+          const double median = err[err.size() / 2], p999 = err[err.size() * 999 / 1000], max = err.back();
+          MESSAGE("t error offset ", offset, " ", name(test), " ", name(isa), " ", name(mode), ": median ", median,
+                  " p99.9 ", p999, " max ", max, " (", err.size(), " hits)");
+          CHECK(median <= kMedianBound);
+        }
+      }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("stress t error: random rays against a double reference at offsets 0 .. 1e6") {
+  t_error({0.0f, 1e3f, 1e5f, 1e6f}, {TriangleTest::moller, TriangleTest::watertight});
+  t_error({0.0f}, {TriangleTest::plane});
+}
+
+// Found by this suite: the plane test (ray/plane, then edge planes) loses t accuracy with the
+// distance of the scene from the origin: median relative t error 7e-8 at offset 0, 7e-5 at
+// 1e3, 7e-3 at 1e5 (p99.9 3, max 39), 7e-2 at 1e6 (max 65), the same on every ISA, against the
+// target median <= 1e-7 (issue 5). The layout (core/triangle_plane.h, Havel-Herout) stores
+// the plane offset d = n . p0 in absolute coordinates and t = (d - n . org) / (n . dir)
+// cancels catastrophically far from the origin. Skipped until the plane test computes
+// relative to the ray origin (or the target is stated per test); moller and watertight pass
+// above.
+TEST_CASE("stress t error: the plane test far from the origin" * doctest::skip()) {
+  t_error({1e3f, 1e5f, 1e6f}, {TriangleTest::plane});
+}
