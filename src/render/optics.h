@@ -31,4 +31,27 @@ inline float schlick(float cos_i, float cos_t, float eta_i, float eta_t) {
   return r0 * r0 + (1.0f - r0 * r0) * c2 * c2 * c;
 }
 
+/// Mirror direction of d about the shading normal ns, or about the geometric normal ng
+/// when the shading normal would send it below the surface.
+inline glm::vec3 reflect_above(const glm::vec3& d, const glm::vec3& ns, const glm::vec3& ng) {
+  const glm::vec3 r = reflect(d, ns);
+  return glm::dot(r, ng) > 0.0f ? r : reflect(d, ng);
+}
+
+/// What happens to unit direction d at a dielectric surface of index `ior` (ns facing
+/// against d; `front`: arriving from outside): the refracted direction and Schlick's
+/// reflectance; on total internal reflection no direction and reflectance 1.
+struct Refraction {
+  std::optional<glm::vec3> dir;
+  float reflectance;
+};
+
+inline Refraction refraction(const glm::vec3& d, const glm::vec3& ns, bool front, float ior) {
+  const float eta_i = front ? 1.0f : ior;
+  const float eta_t = front ? ior : 1.0f;
+  const auto t = refract(d, ns, eta_i, eta_t);
+  if (!t) return {std::nullopt, 1.0f};
+  return {t, schlick(-glm::dot(d, ns), -glm::dot(*t, ns), eta_i, eta_t)};
+}
+
 }  // namespace volley::render

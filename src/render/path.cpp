@@ -38,10 +38,6 @@ glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, 
     if (rng.uniform() >= q) return emitted;
     out.weight /= q;
   }
-  auto mirror_direction = [&]() {
-    const glm::vec3 r = reflect(d, s.ns);
-    return glm::dot(r, s.ng) > 0.0f ? r : reflect(d, s.ng);
-  };
   const float x = rng.uniform() * scale;
   glm::vec3 w;
   if (x < pd) {
@@ -49,19 +45,16 @@ glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, 
     if (glm::dot(w, s.ng) <= 0.0f) return emitted;  // the shading normal sent it below the surface
     out.weight *= m.diffuse * (scale / pd);
   } else if (x < pd + pm) {
-    w = mirror_direction();
+    w = reflect_above(d, s.ns, s.ng);
     out.weight *= m.mirror * (scale / pm);
     out.kind = RayKind::reflection;
   } else if (x < pd + pm + pt) {
-    const float eta_i = s.front ? 1.0f : m.ior;
-    const float eta_t = s.front ? m.ior : 1.0f;
-    const auto t = refract(d, s.ns, eta_i, eta_t);
-    const float f = t ? schlick(-glm::dot(d, s.ns), -glm::dot(*t, s.ns), eta_i, eta_t) : 1.0f;
-    if (rng.uniform() < f) {
-      w = mirror_direction();
+    const Refraction r = refraction(d, s.ns, s.front, m.ior);
+    if (rng.uniform() < r.reflectance) {  // always on total internal reflection
+      w = reflect_above(d, s.ns, s.ng);
       out.kind = RayKind::reflection;
     } else {
-      w = *t;
+      w = *r.dir;
       out.kind = RayKind::refraction;
     }
     out.weight *= m.transmittance * (scale / pt);

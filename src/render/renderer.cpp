@@ -97,13 +97,17 @@ void trace_shadows_through(const Scene& scene, TileWork& w) {
   }
 }
 
-void render_tile(const Scene& scene, const RenderOptions& options, int x0, int y0, TileWork& w, Image& image) {
+// The pipeline a render runs, chosen once (render/pipeline.h).
+struct Pipeline {
+  unsigned stages;  ///< bits of Stage
+  ShadeFn shade;    ///< shading compiled for those stages
+};
+
+void render_tile(const Scene& scene, const RenderOptions& options, const Pipeline& pipeline, int x0, int y0,
+                 TileWork& w, Image& image) {
   const core::Camera& camera = scene.camera();
   const int x1 = std::min(x0 + kTile, camera.width()), y1 = std::min(y0 + kTile, camera.height());
   w.sum.assign(kTile * kTile, glm::vec3(0.0f));
-  // The stages this render runs, chosen once: compile-time specialised shading.
-  const unsigned stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
-  const ShadeFn shade = options.integrator == IntegratorKind::path ? path_shader(stages) : whitted_shader(stages);
   for (int s = 0; s < options.spp; ++s) {
     // Camera rays in 4x4 pixel blocks.
     w.paths.clear();
@@ -127,9 +131,9 @@ void render_tile(const Scene& scene, const RenderOptions& options, int x0, int y
       w.shadows.clear();
       for (std::size_t i = 0; i < w.paths.size(); ++i) {
         const PathState& p = w.paths[i];
-        w.sum[p.pixel] += shade(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
+        w.sum[p.pixel] += pipeline.shade(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
       }
-      if (stages & kRefraction)
+      if (pipeline.stages & kRefraction)
         trace_shadows_through(scene, w);
       else
         trace_shadows(scene.accel(), w);
@@ -155,6 +159,9 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   const int tile_count = tiles_x * tiles_y;
 
+  const unsigned stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
+  const Pipeline pipeline{stages,
+                          options.integrator == IntegratorKind::path ? path_shader(stages) : whitted_shader(stages)};
   std::mutex merge;
   int done = 0;
   tbb::enumerable_thread_specific<TileWork> work_per_thread;
@@ -167,7 +174,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         [&](int tile) {
           TileWork& work = work_per_thread.local();
           work.stats = RayStats{};
-          render_tile(scene, options, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, work, result.image);
+          render_tile(scene, options, pipeline, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, work,
+                      result.image);
           std::lock_guard lock(merge);
           result.stats += work.stats;
           ++done;
@@ -176,7 +184,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         tbb::simple_partitioner());
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
+  result.stages = pipeline.stages;
   return result;
 }
 

@@ -24,22 +24,13 @@ glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hi
     auto spawn = [&](const glm::vec3& w, const glm::vec3& weight, RayKind kind) {
       next.push_back({spawn_ray(s.p, s.p_error, s.ng, w), path.weight * weight, path.pixel, path.depth + 1, kind, path.rng});
     };
-    auto mirror_direction = [&]() {
-      const glm::vec3 r = reflect(d, s.ns);
-      return glm::dot(r, s.ng) > 0.0f ? r : reflect(d, s.ng);  // shading normal bent it below
-    };
+    const glm::vec3 mirror = reflect_above(d, s.ns, s.ng);
     if constexpr ((Stages & kMirrors) != 0)
-      if (m.mirror != glm::vec3(0.0f)) spawn(mirror_direction(), m.mirror, RayKind::reflection);
+      if (m.mirror != glm::vec3(0.0f)) spawn(mirror, m.mirror, RayKind::reflection);
     if ((Stages & kRefraction) != 0 && m.transmittance != glm::vec3(0.0f)) {
-      const float eta_i = s.front ? 1.0f : m.ior;
-      const float eta_t = s.front ? m.ior : 1.0f;
-      if (const auto t = refract(d, s.ns, eta_i, eta_t)) {
-        const float f = schlick(-glm::dot(d, s.ns), -glm::dot(*t, s.ns), eta_i, eta_t);
-        spawn(*t, m.transmittance * (1.0f - f), RayKind::refraction);
-        spawn(mirror_direction(), m.transmittance * f, RayKind::reflection);
-      } else {
-        spawn(mirror_direction(), m.transmittance, RayKind::reflection);  // total internal reflection
-      }
+      const Refraction r = refraction(d, s.ns, s.front, m.ior);
+      if (r.dir) spawn(*r.dir, m.transmittance * (1.0f - r.reflectance), RayKind::refraction);
+      spawn(mirror, m.transmittance * r.reflectance, RayKind::reflection);  // all of it on TIR
     }
   }
   return path.weight * (m.emission + m.ambient);
