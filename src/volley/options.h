@@ -29,6 +29,15 @@ enum class Isa {
 struct Options {
   TriangleTest test = TriangleTest::watertight;  ///< ray/triangle test (and triangle layout)
   Isa isa = Isa::automatic;                      ///< kernel ISA; commit throws Error if the CPU lacks it
+  /// Conservative BVH traversal: box exit distances padded against rounding (Ize 2013)
+  /// and NaN-safe slab operand order, so that `watertight` stays watertight through the
+  /// whole BVH, not only per triangle. false = the plain slab test (faster, may leak
+  /// at box boundaries).
+  bool robust = true;
+  /// Isa::scalar only: run the oracle's triangle test in double precision (vertices and
+  /// rays widened from float, t rounded back). The reference of the accuracy report;
+  /// commit throws Error with a SIMD ISA.
+  bool reference_double = false;
 };
 
 /// Names as used on the command line ("plane", "moller", "watertight").
