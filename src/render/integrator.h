@@ -35,8 +35,18 @@ template <unsigned Stages>
 glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                      std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
 
+/// What an integrator does at a shaded surface point after queuing its direct light: the
+/// light the point adds to the pixel (emission, ambient) and the next bounce's rays.
+/// `view_dir` is the unit direction of the incoming ray. A shading step is surface point,
+/// direct light, then this (the batch shader of shade_batch.h does the first two in SIMD).
+using ContinueFn = glm::vec3 (*)(const Scene& scene, const PathState& path, const SurfacePoint& s,
+                                 const glm::vec3& view_dir, int max_depth, std::vector<PathState>& next);
+
 /// The shading function of `kind` compiled for `stages` (any subset of kAllStages).
 ShadeFn whitted_shader(unsigned stages);
 ShadeFn path_shader(unsigned stages);
+/// Their continuations after direct light, for the same stages.
+ContinueFn whitted_continuation(unsigned stages);
+ContinueFn path_continuation(unsigned stages);
 
 }  // namespace volley::render

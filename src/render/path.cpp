@@ -13,18 +13,13 @@
 namespace volley::render {
 
 template <unsigned Stages>
-glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
-                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
-  if (!hit.hit()) return path.weight * scene.background();
-  const Ray& ray = path.ray;
-  const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
+glm::vec3 continue_path(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
+                        int max_depth, std::vector<PathState>& next) {
   const io::Material& m = scene.materials()[s.material];
-  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
   const glm::vec3 emitted = path.weight * m.emission;
   if (int(path.depth) >= max_depth) return emitted;
 
-  PathState out{ray, path.weight, path.pixel, path.depth + 1, RayKind::diffuse, path.rng};
+  PathState out{path.ray, path.weight, path.pixel, path.depth + 1, RayKind::diffuse, path.rng};
   Rng& rng = out.rng;
   // Pick one event with probability albedo_i / max(sum, 1): absorption takes the rest,
   // and the weight albedo_i / P(i) keeps the estimate unbiased.
@@ -66,15 +61,35 @@ glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, 
   return emitted;
 }
 
+template <unsigned Stages>
+glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
+                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
+  if (!hit.hit()) return path.weight * scene.background();
+  const Ray& ray = path.ray;
+  const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
+  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
+  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
+  return continue_path<Stages>(scene, path, s, d, max_depth, next);
+}
+
 namespace {
 template <std::size_t... S>
 constexpr std::array<ShadeFn, sizeof...(S)> path_table(std::index_sequence<S...>) {
   return {&shade_path<unsigned(S)>...};
 }
+template <std::size_t... S>
+constexpr std::array<ContinueFn, sizeof...(S)> continue_table(std::index_sequence<S...>) {
+  return {&continue_path<unsigned(S)>...};
+}
 }  // namespace
 
 ShadeFn path_shader(unsigned stages) {
   static constexpr auto table = path_table(std::make_index_sequence<kAllStages + 1>{});
+  return table[stages & kAllStages];
+}
+
+ContinueFn path_continuation(unsigned stages) {
+  static constexpr auto table = continue_table(std::make_index_sequence<kAllStages + 1>{});
   return table[stages & kAllStages];
 }
 

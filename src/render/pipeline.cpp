@@ -20,6 +20,8 @@ std::string describe_skipped(unsigned stages, const SceneFeatures& f) {
     add("refraction rays; shadow rays use any-hit occlusion (no transmissive materials)");
   if (!(stages & kSmoothNormals)) add("normal interpolation (no per-corner normals)");
   if (!f.polygons) add("polygon tests (no polygons)");
+  if (batch_shadable(stages))
+    add("per-hit shading: surface points and direct light computed for several hits at once in SIMD lanes");
   return out.empty() ? "nothing (the scene uses every stage)" : out;
 }
 

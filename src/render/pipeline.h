@@ -19,6 +19,13 @@ enum Stage : unsigned {
   kAllStages = (1u << 4) - 1u,   ///< the general pipeline
 };
 
+/// True when a pipeline with these stages shades whole streams in SIMD lanes
+/// (render/shade_batch.h): no stage that branches per hit (mirror or refraction rays) or
+/// interpolates normals.
+constexpr bool batch_shadable(unsigned stages) {
+  return (stages & (kMirrors | kRefraction | kSmoothNormals)) == 0;
+}
+
 /// The stages `features` need.
 unsigned needed_stages(const SceneFeatures& features);
 

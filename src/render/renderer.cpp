@@ -15,6 +15,7 @@
 
 #include "render/path_state.h"
 #include "render/pipeline.h"
+#include "render/shade_batch.h"
 #include "render/spawn.h"
 
 namespace volley::render {
@@ -100,7 +101,9 @@ void trace_shadows_through(const Scene& scene, TileWork& w) {
 // The pipeline a render runs, chosen once (render/pipeline.h).
 struct Pipeline {
   unsigned stages;  ///< bits of Stage
-  ShadeFn shade;    ///< shading compiled for those stages
+  ShadeFn shade;    ///< shading compiled for those stages, one hit at a time
+  ContinueFn then;  ///< its continuation after direct light
+  bool batch;       ///< shade whole streams in SIMD lanes (shade_batch.h)
 };
 
 void render_tile(const Scene& scene, const RenderOptions& options, const Pipeline& pipeline, int x0, int y0,
@@ -129,9 +132,14 @@ void render_tile(const Scene& scene, const RenderOptions& options, const Pipelin
       trace_paths(scene.accel(), w);
       w.next.clear();
       w.shadows.clear();
-      for (std::size_t i = 0; i < w.paths.size(); ++i) {
-        const PathState& p = w.paths[i];
-        w.sum[p.pixel] += pipeline.shade(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
+      if (pipeline.batch) {
+        shade_batch(scene, pipeline.stages, pipeline.shade, pipeline.then, w.paths.data(), w.hits.data(),
+                    w.paths.size(), options.max_depth, w.next, w.shadows, w.sum.data());
+      } else {
+        for (std::size_t i = 0; i < w.paths.size(); ++i) {
+          const PathState& p = w.paths[i];
+          w.sum[p.pixel] += pipeline.shade(scene, p, w.hits[i], options.max_depth, w.next, w.shadows);
+        }
       }
       if (pipeline.stages & kRefraction)
         trace_shadows_through(scene, w);
@@ -160,8 +168,10 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const int tile_count = tiles_x * tiles_y;
 
   const unsigned stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
-  const Pipeline pipeline{stages,
-                          options.integrator == IntegratorKind::path ? path_shader(stages) : whitted_shader(stages)};
+  const bool whitted = options.integrator == IntegratorKind::whitted;
+  const Pipeline pipeline{stages, whitted ? whitted_shader(stages) : path_shader(stages),
+                          whitted ? whitted_continuation(stages) : path_continuation(stages),
+                          batch_shadable(stages)};
   std::mutex merge;
   int done = 0;
   tbb::enumerable_thread_specific<TileWork> work_per_thread;
@@ -185,6 +195,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.stages = pipeline.stages;
+  result.batch_shaded = pipeline.batch;
   return result;
 }
 

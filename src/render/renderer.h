@@ -37,6 +37,7 @@ struct RenderResult {
   RayStats stats;
   double seconds = 0.0;  ///< wall time of the render loop (not scene loading or building)
   unsigned stages = 0;   ///< pipeline stages that ran (bits of render::Stage)
+  bool batch_shaded = false;  ///< hits shaded in SIMD lanes (render/shade_batch.h)
 };
 
 /// Renders the scene through its camera (image size = the camera's).

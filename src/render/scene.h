@@ -56,6 +56,13 @@ class Scene {
   template <bool Smooth>
   SurfacePoint surface_as(const Ray& ray, const Hit& hit) const;
 
+  /// Triangles (prim ids 0 .. triangle_count() - 1): vertex positions, 3 indices and a
+  /// material per triangle. Polygons follow them in prim-id order.
+  std::size_t triangle_count() const { return tri_material_.size(); }
+  const std::vector<glm::vec3>& positions() const { return positions_; }
+  const std::vector<std::uint32_t>& indices() const { return indices_; }
+  const std::vector<std::uint32_t>& triangle_materials() const { return tri_material_; }
+
  private:
   Accel accel_;
   core::Camera camera_;
