@@ -25,7 +25,7 @@ std::filesystem::path project_scenes_dir() { return std::filesystem::path(VOLLEY
 std::filesystem::path bench_scenes_dir() { return std::filesystem::path(VOLLEY_BENCH_SOURCE_DIR) / "bench" / "scenes"; }
 
 SceneFile scene_file(const std::string& name) {
-  enum class Dir { project, bench };
+  enum class Dir { project, bench, shared };
   static const std::map<std::string, std::pair<Dir, std::string>> kScenes = {
       // name -> (folder, file)
       {"cornell", {Dir::project, "cornell.json"}},                    // 32 triangles + a sphere mesh, mirror and glass
@@ -34,11 +34,14 @@ SceneFile scene_file(const std::string& name) {
       {"teapot", {Dir::bench, "teapot.json"}},          // 6.3 k triangles filling the view (the callgrind scene)
       {"bunny", {Dir::bench, "bunny.json"}},            // 69 k triangles, close-up
       {"conference", {Dir::bench, "conference.json"}},  // 331 k triangles, camera inside the room
+      {"bunny-bare", {Dir::shared, "stanford-bunny.obj"}},  // a bare mesh: automatic camera and light
   };
   const auto it = kScenes.find(name);
   if (it == kScenes.end()) throw std::invalid_argument("unknown benchmark scene " + name);
   const auto& [dir, file] = it->second;
-  return {name, (dir == Dir::project ? project_scenes_dir() : bench_scenes_dir()) / file};
+  const std::filesystem::path folder =
+      dir == Dir::project ? project_scenes_dir() : dir == Dir::bench ? bench_scenes_dir() : shared_scenes_dir();
+  return {name, folder / file};
 }
 
 void note_scene(const std::string& name) {

@@ -50,8 +50,9 @@ void render_pipeline(benchmark::State& state, const std::string& scene, bool spe
 
 const bool registered = [] {
   // Feature sets: diffuse + shadows (path), mirrors + polygons, glass + mirror + smooth
-  // normals, a large diffuse mesh with shadows.
-  for (const char* scene : {"cornell-original", "polygons", "cornell", "conference"}) {
+  // normals, a large diffuse mesh with shadows (Whitted), a bare mesh (automatic camera
+  // and light, Whitted).
+  for (const char* scene : {"cornell-original", "polygons", "cornell", "conference", "bunny-bare"}) {
     note_scene(scene);
     for (bool specialize : {true, false}) {
       const std::string name = std::string("specialize/") + scene + (specialize ? "/specialised" : "/general");
