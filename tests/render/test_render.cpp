@@ -2,7 +2,9 @@
 // reference image, and spawned rays never re-hit the surface they leave.
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <random>
 
@@ -193,4 +195,21 @@ TEST_CASE("render: a shadow ray leaving a long axis-aligned wall does not re-hit
     rehits += scene.accel().occluded(render::spawn_shadow_ray(s.p, s.p_error, s.ng, scene.lights()[0].position));
   }
   CHECK(rehits == 0);
+}
+
+TEST_CASE("render: next_float is std::nextafter toward +-inf") {
+  const float kInf = std::numeric_limits<float>::infinity();
+  std::vector<float> xs = {0.0f, -0.0f, 1.0f, -1.0f, std::numeric_limits<float>::denorm_min(),
+                           -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
+                           std::numeric_limits<float>::max(), -std::numeric_limits<float>::max(), kInf, -kInf};
+  std::mt19937 rng(11);
+  for (int i = 0; i < 20000; ++i) xs.push_back(std::bit_cast<float>(std::uint32_t(rng())));
+  for (float x : xs) {
+    if (std::isnan(x)) continue;
+    CAPTURE(x);
+    CHECK(std::bit_cast<std::uint32_t>(render::next_float<true>(x)) ==
+          std::bit_cast<std::uint32_t>(std::nextafter(x, kInf)));
+    CHECK(std::bit_cast<std::uint32_t>(render::next_float<false>(x)) ==
+          std::bit_cast<std::uint32_t>(std::nextafter(x, -kInf)));
+  }
 }
