@@ -21,7 +21,8 @@ std::string describe_skipped(unsigned stages, const SceneFeatures& f) {
   if (!(stages & kSmoothNormals)) add("normal interpolation (no per-corner normals)");
   if (!f.polygons) add("polygon tests (no polygons)");
   if (batch_shadable(stages))
-    add("per-hit shading: surface points and direct light computed for several hits at once in SIMD lanes");
+    add("one-at-a-time shading (no per-hit branches: surface points and direct light are computed for "
+        "several hits at once in SIMD lanes)");
   return out.empty() ? "nothing (the scene uses every stage)" : out;
 }
 
