@@ -19,21 +19,15 @@ enum class IntegratorKind { whitted, path };
 using ShadeFn = glm::vec3 (*)(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
                               std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
 
-/// Whitted (1980), the notes' ray tracer: emission + ambient + Phong from each visible
-/// light, plus a mirror ray and Fresnel-weighted (Schlick) refraction and reflection rays,
-/// total internal reflection handled, up to max_depth bounces. `Stages` (bits of Stage)
-/// compiles out what the scene does not use.
-template <unsigned Stages>
-glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
-                        std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
-
-/// Path tracing (Kajiya 1986): emission + Phong direct light from the point lights (next
-/// event estimation), then one scattering event chosen by albedo: cosine-weighted diffuse,
-/// mirror, or Fresnel-chosen reflection/refraction; Russian roulette after 3 bounces. No
-/// ambient term: indirect light replaces it.
-template <unsigned Stages>
-glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
-                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows);
+// The integrators (whitted.cpp, path.cpp), each a continuation after direct light:
+// Whitted (1980), the notes' ray tracer: emission + ambient + Phong from each visible
+// light, plus a mirror ray and Fresnel-weighted (Schlick) refraction and reflection rays,
+// total internal reflection handled, up to max_depth bounces.
+// Path tracing (Kajiya 1986): emission + Phong direct light from the point lights (next
+// event estimation), then one scattering event chosen by albedo: cosine-weighted diffuse,
+// mirror, or Fresnel-chosen reflection/refraction; Russian roulette after 3 bounces. No
+// ambient term: indirect light replaces it.
+// Both are compiled per stage set (bits of Stage), leaving out what a scene does not use.
 
 /// What an integrator does at a shaded surface point after queuing its direct light: the
 /// light the point adds to the pixel (emission, ambient) and the next bounce's rays.

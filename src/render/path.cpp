@@ -1,20 +1,25 @@
 // Path tracing for diffuse interreflection, next-event estimation to the point lights,
 // one scattering event per vertex chosen by albedo.
-#include <array>
 #include <cmath>
-#include <utility>
 
-#include "render/integrator.h"
-#include "render/lighting.h"
 #include "render/optics.h"
 #include "render/sampling.h"
+#include "render/shading_step.h"
 #include "render/spawn.h"
 
 namespace volley::render {
 
+namespace {
+
+struct Path {
+  template <unsigned Stages>
+  static glm::vec3 then(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
+                        int max_depth, std::vector<PathState>& next);
+};
+
 template <unsigned Stages>
-glm::vec3 continue_path(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
-                        int max_depth, std::vector<PathState>& next) {
+glm::vec3 Path::then(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
+                     int max_depth, std::vector<PathState>& next) {
   const io::Material& m = scene.materials()[s.material];
   const glm::vec3 emitted = path.weight * m.emission;
   if (int(path.depth) >= max_depth) return emitted;
@@ -61,36 +66,9 @@ glm::vec3 continue_path(const Scene& scene, const PathState& path, const Surface
   return emitted;
 }
 
-template <unsigned Stages>
-glm::vec3 shade_path(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
-                     std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
-  if (!hit.hit()) return path.weight * scene.background();
-  const Ray& ray = path.ray;
-  const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
-  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
-  return continue_path<Stages>(scene, path, s, d, max_depth, next);
-}
-
-namespace {
-template <std::size_t... S>
-constexpr std::array<ShadeFn, sizeof...(S)> path_table(std::index_sequence<S...>) {
-  return {&shade_path<unsigned(S)>...};
-}
-template <std::size_t... S>
-constexpr std::array<ContinueFn, sizeof...(S)> continue_table(std::index_sequence<S...>) {
-  return {&continue_path<unsigned(S)>...};
-}
 }  // namespace
 
-ShadeFn path_shader(unsigned stages) {
-  static constexpr auto table = path_table(std::make_index_sequence<kAllStages + 1>{});
-  return table[stages & kAllStages];
-}
-
-ContinueFn path_continuation(unsigned stages) {
-  static constexpr auto table = continue_table(std::make_index_sequence<kAllStages + 1>{});
-  return table[stages & kAllStages];
-}
+ShadeFn path_shader(unsigned stages) { return shader_for<Path>(stages); }
+ContinueFn path_continuation(unsigned stages) { return continuation_for<Path>(stages); }
 
 }  // namespace volley::render

@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-
 #include <xsimd/xsimd.hpp>
 
 #include "render/spawn.h"

@@ -6,9 +6,8 @@
 // shades one at a time (integrator.h).
 #pragma once
 #include <cstddef>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "render/integrator.h"
 

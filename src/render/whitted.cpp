@@ -1,23 +1,29 @@
 // Whitted-style ray tracing with the notes' Phong model, one bounce at a time.
-#include <array>
 #include <cmath>
-#include <utility>
 
-#include "render/integrator.h"
-#include "render/lighting.h"
 #include "render/optics.h"
+#include "render/shading_step.h"
 #include "render/spawn.h"
 
 namespace volley::render {
 
+namespace {
+
+struct Whitted {
+  template <unsigned Stages>
+  static glm::vec3 then(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
+                        int max_depth, std::vector<PathState>& next);
+};
+
 template <unsigned Stages>
-glm::vec3 continue_whitted(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
-                           int max_depth, std::vector<PathState>& next) {
+glm::vec3 Whitted::then(const Scene& scene, const PathState& path, const SurfacePoint& s, const glm::vec3& d,
+                        int max_depth, std::vector<PathState>& next) {
   const io::Material& m = scene.materials()[s.material];
   if constexpr ((Stages & (kMirrors | kRefraction)) != 0) {
     if (int(path.depth) >= max_depth) return path.weight * (m.emission + m.ambient);
     auto spawn = [&](const glm::vec3& w, const glm::vec3& weight, RayKind kind) {
-      next.push_back({spawn_ray(s.p, s.p_error, s.ng, w), path.weight * weight, path.pixel, path.depth + 1, kind, path.rng});
+      next.push_back(
+          {spawn_ray(s.p, s.p_error, s.ng, w), path.weight * weight, path.pixel, path.depth + 1, kind, path.rng});
     };
     const glm::vec3 mirror = reflect_above(d, s.ns, s.ng);
     if constexpr ((Stages & kMirrors) != 0)
@@ -31,36 +37,9 @@ glm::vec3 continue_whitted(const Scene& scene, const PathState& path, const Surf
   return path.weight * (m.emission + m.ambient);
 }
 
-template <unsigned Stages>
-glm::vec3 shade_whitted(const Scene& scene, const PathState& path, const Hit& hit, int max_depth,
-                        std::vector<PathState>& next, std::vector<ShadowQuery>& shadows) {
-  if (!hit.hit()) return path.weight * scene.background();
-  const Ray& ray = path.ray;
-  const glm::vec3 d = glm::normalize(glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2]));
-  const SurfacePoint s = scene.surface_as<(Stages & kSmoothNormals) != 0>(ray, hit);
-  if constexpr ((Stages & kShadows) != 0) queue_direct_lighting(scene, s, d, path.weight, path.pixel, shadows);
-  return continue_whitted<Stages>(scene, path, s, d, max_depth, next);
-}
-
-namespace {
-template <std::size_t... S>
-constexpr std::array<ShadeFn, sizeof...(S)> whitted_table(std::index_sequence<S...>) {
-  return {&shade_whitted<unsigned(S)>...};
-}
-template <std::size_t... S>
-constexpr std::array<ContinueFn, sizeof...(S)> continue_table(std::index_sequence<S...>) {
-  return {&continue_whitted<unsigned(S)>...};
-}
 }  // namespace
 
-ShadeFn whitted_shader(unsigned stages) {
-  static constexpr auto table = whitted_table(std::make_index_sequence<kAllStages + 1>{});
-  return table[stages & kAllStages];
-}
-
-ContinueFn whitted_continuation(unsigned stages) {
-  static constexpr auto table = continue_table(std::make_index_sequence<kAllStages + 1>{});
-  return table[stages & kAllStages];
-}
+ShadeFn whitted_shader(unsigned stages) { return shader_for<Whitted>(stages); }
+ContinueFn whitted_continuation(unsigned stages) { return continuation_for<Whitted>(stages); }
 
 }  // namespace volley::render
