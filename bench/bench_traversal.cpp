@@ -16,6 +16,11 @@
 // traversal/<scene>/<isa>/<form>/<workload>; the label is the ISA; the counter hit_rate
 // (fraction of rays that hit / are occluded) is a deterministic check of the answers.
 // The scenes and their rays are built once per process, outside the timed loops.
+//
+// Robust against fast slab tests (Options::robust, issue #5): traversal_slabs/<scene>/<isa>/
+// <form>/primary/<robust|fast>, bunny and conference, AVX2 and AVX-512, the same rays and
+// scene both ways; run with --benchmark_enable_random_interleaving and repetitions so that
+// the two of a pair alternate in one process (perf/robust.md).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -25,6 +30,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -50,12 +56,13 @@ const char* to_string(Form f) { return f == Form::single ? "single" : f == Form:
 /// every ISA gives the oracle's answers, so the secondary rays do not depend on it).
 /// Both are made on this thread alone: no oneTBB worker exists to run (and be counted
 /// by callgrind) beside the timed loop, and the structure cannot depend on scheduling.
-const render::Scene& scene_for(const std::string& name, Isa isa) {
-  static std::map<std::pair<std::string, Isa>, std::unique_ptr<render::Scene>> cache;
-  auto& slot = cache[{name, isa}];
+const render::Scene& scene_for(const std::string& name, Isa isa, bool robust = true) {
+  static std::map<std::tuple<std::string, Isa, bool>, std::unique_ptr<render::Scene>> cache;
+  auto& slot = cache[{name, isa, robust}];
   if (!slot) {
     const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    slot = std::make_unique<render::Scene>(scene_desc(name), kImage, kImage, Options{TriangleTest::watertight, isa});
+    slot = std::make_unique<render::Scene>(scene_desc(name), kImage, kImage,
+                                           Options{TriangleTest::watertight, isa, robust});
   }
   return *slot;
 }
@@ -105,12 +112,13 @@ std::size_t trace(const Accel& accel, const std::vector<Ray>& rays, std::size_t 
   return count;
 }
 
-void traverse(benchmark::State& state, const std::string& scene, Isa isa, Form form, render::Workload workload) {
+void traverse(benchmark::State& state, const std::string& scene, Isa isa, Form form, render::Workload workload,
+              bool robust = true) {
   state.SetLabel(std::string(volley::to_string(isa)));
   const render::Scene* s = nullptr;
   const std::vector<Ray>* rays = nullptr;
   try {
-    s = &scene_for(scene, isa);
+    s = &scene_for(scene, isa, robust);
     rays = &rays_for(scene, isa, workload);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
@@ -147,6 +155,20 @@ const bool registered = [] {
         }
     }
   }
+  // The robust / fast pairs (primary rays).
+  for (const char* scene : {"bunny", "conference"})
+    for (Isa isa : {Isa::avx2, Isa::avx512}) {
+      if (!bench_isa(isa)) continue;
+      for (Form form : {Form::single, Form::packet, Form::stream})
+        for (bool robust : {true, false}) {
+          const std::string name = std::string("traversal_slabs/") + scene + "/" +
+                                   std::string(volley::to_string(isa)) + "/" + to_string(form) + "/primary/" +
+                                   (robust ? "robust" : "fast");
+          benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) {
+            traverse(st, scene, isa, form, render::Workload::primary, robust);
+          })->Unit(benchmark::kMicrosecond);
+        }
+    }
   return true;
 }();
 

@@ -8,6 +8,9 @@ namespace volley::simd {
 template struct WideKernels<Avx2, TriangleTest::moller>;
 template struct WideKernels<Avx2, TriangleTest::plane>;
 template struct WideKernels<Avx2, TriangleTest::watertight>;
+// Options::robust = false: the unpadded slab test (the fast path, and the mutation tests).
+template struct WideKernels<Avx2, TriangleTest::moller, false>;
+template struct WideKernels<Avx2, TriangleTest::plane, false>;
 template struct WideKernels<Avx2, TriangleTest::watertight, false>;
 
 }  // namespace volley::simd

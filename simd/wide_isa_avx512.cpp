@@ -12,6 +12,9 @@ namespace volley::simd {
 template struct WideKernels<Avx512, TriangleTest::moller>;
 template struct WideKernels<Avx512, TriangleTest::plane>;
 template struct WideKernels<Avx512, TriangleTest::watertight>;
+// Options::robust = false: the unpadded slab test (the fast path, and the mutation tests).
+template struct WideKernels<Avx512, TriangleTest::moller, false>;
+template struct WideKernels<Avx512, TriangleTest::plane, false>;
 template struct WideKernels<Avx512, TriangleTest::watertight, false>;
 
 }  // namespace volley::simd

@@ -8,6 +8,9 @@ namespace volley::simd {
 template struct WideKernels<Sse42, TriangleTest::moller>;
 template struct WideKernels<Sse42, TriangleTest::plane>;
 template struct WideKernels<Sse42, TriangleTest::watertight>;
+// Options::robust = false: the unpadded slab test (the fast path, and the mutation tests).
+template struct WideKernels<Sse42, TriangleTest::moller, false>;
+template struct WideKernels<Sse42, TriangleTest::plane, false>;
 template struct WideKernels<Sse42, TriangleTest::watertight, false>;
 
 }  // namespace volley::simd

@@ -7,8 +7,8 @@
 // Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
 // operation for operation: slab distances (plane - org) * (1 / dir) with near and far
 // plane picked by the octant of the ray (not by min/max), entry = max(near_x, near_y,
-// near_z, tmin), exit = min(far_x, far_y, far_z, tmax) * kSlabExitPad, hit when
-// entry <= exit. NaN-safe operand order: every max/min is maxps/minps(distance, running
+// near_z, tmin), exit = min(far_x, far_y, far_z, tmax) * kSlabExitPad (Robust; no padding
+// for Robust = false), hit when entry <= exit. NaN-safe operand order: every max/min is maxps/minps(distance, running
 // bound), which returns its second operand when either is NaN, so a NaN slab distance
 // (origin on a slab plane with a zero direction component) leaves the running bound
 // unchanged and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`.
@@ -72,9 +72,10 @@ struct WideView {
 
 /// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
 /// W = kLanes<Arch> triangles. Robust = false drops the exit padding (kSlabExitPad) from
-/// the box test and the stack pruning: kept only for the mutation test that shows the
-/// padding matters (tests/accel). All functions are thread-safe (pure functions of their
-/// arguments).
+/// the box test and the stack pruning (Options::robust = false, the fast path; the NaN-safe
+/// operand order stays, it costs nothing); its answers may differ from the oracle's where a
+/// ray grazes a box (the mutation test in tests/accel shows it). All functions are
+/// thread-safe (pure functions of their arguments).
 ///
 /// Semantics, all forms: the answers of the scalar oracle's closest-hit / any-hit
 /// traversal with the same triangle test (same hit / miss; same prim, or the same t when
@@ -905,18 +906,24 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
 }
 
 // Explicit instantiation declarations: the definitions live in the per-ISA files only.
-// Robust = false (the mutation test's unpadded variant) for the watertight test only.
+// Every test twice: Robust = true (default) and false (Options::robust = false).
 extern template struct WideKernels<Sse42, TriangleTest::moller>;
 extern template struct WideKernels<Sse42, TriangleTest::plane>;
 extern template struct WideKernels<Sse42, TriangleTest::watertight>;
+extern template struct WideKernels<Sse42, TriangleTest::moller, false>;
+extern template struct WideKernels<Sse42, TriangleTest::plane, false>;
 extern template struct WideKernels<Sse42, TriangleTest::watertight, false>;
 extern template struct WideKernels<Avx2, TriangleTest::moller>;
 extern template struct WideKernels<Avx2, TriangleTest::plane>;
 extern template struct WideKernels<Avx2, TriangleTest::watertight>;
+extern template struct WideKernels<Avx2, TriangleTest::moller, false>;
+extern template struct WideKernels<Avx2, TriangleTest::plane, false>;
 extern template struct WideKernels<Avx2, TriangleTest::watertight, false>;
 extern template struct WideKernels<Avx512, TriangleTest::moller>;
 extern template struct WideKernels<Avx512, TriangleTest::plane>;
 extern template struct WideKernels<Avx512, TriangleTest::watertight>;
+extern template struct WideKernels<Avx512, TriangleTest::moller, false>;
+extern template struct WideKernels<Avx512, TriangleTest::plane, false>;
 extern template struct WideKernels<Avx512, TriangleTest::watertight, false>;
 
 }  // namespace volley::simd

@@ -57,12 +57,22 @@ std::uint32_t Accel::add_polygon(const float* xyz, std::size_t vertex_count) {
 
 void Accel::commit(const Options& options) {
   const auto start = std::chrono::steady_clock::now();
+  Isa isa = Isa::scalar;
   try {
-    impl_->isa = simd::resolve_isa(options.isa);
+    isa = simd::resolve_isa(options.isa);
   } catch (const std::invalid_argument& e) {
     throw Error(e.what());
   }
+  // Checked before anything changes, so a rejected commit leaves the Accel as it was.
+  if (options.reference_double && isa != Isa::scalar)
+    throw Error("commit: reference_double runs the scalar oracle in double precision and needs Isa::scalar, got " +
+                std::string(to_string(isa)) + (options.isa == Isa::automatic ? " (from Isa::automatic)" : ""));
+  if (options.reference_double && !options.robust)
+    throw Error("commit: reference_double traverses with robust slabs; robust = false contradicts it");
+  impl_->isa = isa;
   impl_->test = options.test;
+  impl_->robust = options.robust;
+  impl_->reference_double = options.reference_double;
   impl_->build();
   impl_->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   impl_->committed = true;

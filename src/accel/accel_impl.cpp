@@ -36,6 +36,13 @@ core::BvhBuildOptions wide_build_options(int w) {
   core::BvhBuildOptions o;
   o.max_leaf_size = 16;
   o.intersection_cost = w >= 16 ? 0.15f : 0.25f;
+  // W = 16: an empty block slot priced at 0.4 triangle tests fills blocks 57-62% -> 71-83%
+  // (Sponza 79 -> 63 bytes/triangle, packets 0..-3%; 1.0: 80%, but packets -10..-55%).
+  // perf/build.md has the measurements.
+  if (w >= 16) {
+    o.leaf_block_width = w;
+    o.padding_cost = 0.4f;
+  }
   return o;
 }
 
@@ -84,7 +91,12 @@ void Accel::Impl::build() {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const glm::vec3* p = &triangles[3 * i];
-      if (core::is_degenerate(p[0], p[1], p[2])) {
+      // The reference keeps what has area in double (a float cross product can round to 0).
+      const bool flat = reference_double
+                            ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
+                                                          core::Vec3<double>(p[2]))
+                            : core::is_degenerate(p[0], p[1], p[2]);
+      if (flat) {
         is_degenerate[i] = 1;
         continue;
       }
@@ -95,8 +107,9 @@ void Accel::Impl::build() {
 
   wide.reset();
   plane_triangles.clear();
+  plane_triangles_double.clear();
   if (isa != Isa::scalar) {
-    wide = accel::WideAccel::create(test, isa);
+    wide = accel::WideAccel::create(test, isa, robust);
     build_options = wide_build_options(wide->block_width());
   } else {
     build_options = core::BvhBuildOptions{};
@@ -108,6 +121,13 @@ void Accel::Impl::build() {
   if (wide) {
     wide->build(triangle_bvh, &triangles[0].x, triangle_ids.data());
     triangle_bvh = core::Bvh{};
+  } else if (test == TriangleTest::plane && reference_double) {
+    plane_triangles_double.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const glm::vec3* p = &triangles[3 * i];
+      plane_triangles_double.push_back(core::PlaneTriangle<double>::from(
+          core::Vec3<double>(p[0]), core::Vec3<double>(p[1]), core::Vec3<double>(p[2])));
+    }
   } else if (test == TriangleTest::plane) {
     plane_triangles.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -125,10 +145,10 @@ void Accel::Impl::build() {
   polygon_bvh = polygons.empty() ? core::Bvh{} : core::build_bvh(poly_boxes, core::BvhBuildOptions{});
 }
 
-template <bool AnyHit>
+template <bool AnyHit, bool Robust>
 bool Accel::Impl::trace_triangles_scalar(const core::RayT<float>& r, Hit& hit) const {
   const core::WoopRay<float> woop = core::make_woop_ray(r.dir);
-  return core::traverse<AnyHit>(triangle_bvh, r, [&](std::uint32_t prim, float& tmax) {
+  return core::traverse<AnyHit, Robust>(triangle_bvh, r, [&](std::uint32_t prim, float& tmax) {
     const glm::vec3* p = &triangles[3 * prim];
     core::RayT<float> q = r;
     q.tmax = tmax;
@@ -153,8 +173,46 @@ bool Accel::Impl::trace_triangles_scalar(const core::RayT<float>& r, Hit& hit) c
 }
 
 template <bool AnyHit>
+bool Accel::Impl::trace_triangles_double(const core::RayT<float>& r, Hit& hit) const {
+  // The widened ray; q.tmax is the nearest double t so far, so triangles closer together
+  // than a float ulp are still ordered by their double distances.
+  core::RayT<double> q = core::ray_cast<double>(r);
+  const core::WoopRay<double> woop = core::make_woop_ray(q.dir);
+  // Robust slabs: the float traversal's tmax is the rounded t, within the padding's margin.
+  return core::traverse<AnyHit, true>(triangle_bvh, r, [&](std::uint32_t prim, float& tmax) {
+    const glm::vec3* p = &triangles[3 * prim];
+    const core::Vec3<double> p0(p[0]), p1(p[1]), p2(p[2]);
+    core::TriHit<double> h;
+    bool ok = false;
+    switch (test) {
+      case TriangleTest::plane:
+        ok = core::intersect_plane(q, plane_triangles_double[prim], h);
+        break;
+      case TriangleTest::moller:
+        ok = core::intersect_moller(q, p0, p1, p2, h);
+        break;
+      case TriangleTest::watertight:
+        ok = core::intersect_watertight(q, woop, p0, p1, p2, h);
+        break;
+    }
+    // A double t just below tmax can round onto it: [tmin, tmax) holds for the float t.
+    const float t = static_cast<float>(h.t);
+    if (!ok || !(t < r.tmax)) return false;
+    q.tmax = h.t;
+    tmax = t;
+    hit = {t, static_cast<float>(h.u), static_cast<float>(h.v), triangle_ids[prim]};
+    return true;
+  });
+}
+
+template <bool AnyHit>
 bool Accel::Impl::trace_polygons(const core::RayT<float>& r, Hit& hit) const {
-  return core::traverse<AnyHit>(polygon_bvh, r, [&](std::uint32_t prim, float& tmax) {
+  return robust ? trace_polygons_as<AnyHit, true>(r, hit) : trace_polygons_as<AnyHit, false>(r, hit);
+}
+
+template <bool AnyHit, bool Robust>
+bool Accel::Impl::trace_polygons_as(const core::RayT<float>& r, Hit& hit) const {
+  return core::traverse<AnyHit, Robust>(polygon_bvh, r, [&](std::uint32_t prim, float& tmax) {
     core::RayT<float> q = r;
     q.tmax = tmax;
     float t;
@@ -177,7 +235,9 @@ bool Accel::Impl::trace(const Ray& ray, Hit& hit) const {
       found = hit.hit();
     }
   } else if (!triangle_bvh.nodes.empty()) {
-    found = trace_triangles_scalar<AnyHit>(r, hit);
+    found = reference_double ? trace_triangles_double<AnyHit>(r, hit)
+            : robust         ? trace_triangles_scalar<AnyHit, true>(r, hit)
+                             : trace_triangles_scalar<AnyHit, false>(r, hit);
   }
   if (AnyHit && found) return true;
   if (!polygon_bvh.nodes.empty()) {
@@ -307,6 +367,8 @@ AccelInfo Accel::Impl::info() const {
   info.polygons = polygons.size();
   info.test = test;
   info.isa = isa;
+  info.robust = robust;
+  info.reference_double = reference_double;
   info.build_seconds = build_seconds;
   if (triangle_stats.nodes != 0) {
     info.binary_sah_cost = triangle_stats.sah_cost;
@@ -332,8 +394,10 @@ AccelInfo Accel::Impl::info() const {
       info.bytes = triangle_stats.bytes;
       info.mean_children = 2.0;
       // The triangle layout of the test in use (the input copy kept for re-commits not counted).
-      info.bytes += test == TriangleTest::plane ? plane_triangles.size() * sizeof(core::PlaneTriangle<float>)
-                                                : triangles.size() * sizeof(glm::vec3);
+      info.bytes += test == TriangleTest::plane
+                        ? plane_triangles.size() * sizeof(core::PlaneTriangle<float>) +
+                              plane_triangles_double.size() * sizeof(core::PlaneTriangle<double>)
+                        : triangles.size() * sizeof(glm::vec3);
     }
   }
   if (!polygon_bvh.nodes.empty()) {

@@ -31,6 +31,8 @@ struct Accel::Impl {
   bool committed = false;
   TriangleTest test = TriangleTest::watertight;
   Isa isa = Isa::scalar;
+  bool robust = true;             ///< Options::robust: padded slab tests
+  bool reference_double = false;  ///< Options::reference_double (isa == scalar only)
   double build_seconds = 0.0;
   std::size_t degenerate = 0;
   core::Bvh triangle_bvh;  ///< scalar path only (the SIMD path keeps the wide BVH)
@@ -38,6 +40,8 @@ struct Accel::Impl {
   core::BvhBuildOptions build_options;          ///< of the triangle BVH
   core::BvhStats triangle_stats;                 ///< of the binary triangle BVH, as built
   std::vector<core::PlaneTriangle<float>> plane_triangles;  ///< scalar `plane` only
+  /// `plane` with reference_double only: the planes of the widened vertices.
+  std::vector<core::PlaneTriangle<double>> plane_triangles_double;
   /// SIMD path (isa != scalar): the wide BVH over triangle blocks.
   std::unique_ptr<accel::WideAccel> wide;
 
@@ -53,9 +57,15 @@ struct Accel::Impl {
   AccelInfo info() const;
 
  private:
-  template <bool AnyHit>
+  template <bool AnyHit, bool Robust>
   bool trace_triangles_scalar(const core::RayT<float>& ray, Hit& hit) const;
+  /// The reference: the triangle test in double on the widened ray, t, u, v rounded to float.
+  template <bool AnyHit>
+  bool trace_triangles_double(const core::RayT<float>& ray, Hit& hit) const;
   /// Polygons nearer than `tmax`: updates `hit` (closest) or answers at the first one.
+  template <bool AnyHit, bool Robust>
+  bool trace_polygons_as(const core::RayT<float>& ray, Hit& hit) const;
+  /// trace_polygons_as with the committed `robust`.
   template <bool AnyHit>
   bool trace_polygons(const core::RayT<float>& ray, Hit& hit) const;
   template <bool AnyHit>

@@ -48,22 +48,22 @@ class WideAccelFor final : public WideAccel {
   simd::WideStats stats_;
 };
 
-template <class Arch>
-std::unique_ptr<WideAccel> make_for(TriangleTest test, bool robust) {
-  if (!robust) {
-    if (test != TriangleTest::watertight)
-      throw std::invalid_argument("WideAccel::create: the unpadded variant exists for the watertight test only");
-    return std::make_unique<WideAccelFor<Arch, TriangleTest::watertight, false>>();
-  }
+template <class Arch, bool Robust>
+std::unique_ptr<WideAccel> make_for(TriangleTest test) {
   switch (test) {
     case TriangleTest::plane:
-      return std::make_unique<WideAccelFor<Arch, TriangleTest::plane, true>>();
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::plane, Robust>>();
     case TriangleTest::moller:
-      return std::make_unique<WideAccelFor<Arch, TriangleTest::moller, true>>();
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::moller, Robust>>();
     case TriangleTest::watertight:
-      return std::make_unique<WideAccelFor<Arch, TriangleTest::watertight, true>>();
+      return std::make_unique<WideAccelFor<Arch, TriangleTest::watertight, Robust>>();
   }
   throw std::invalid_argument("WideAccel::create: unknown triangle test");
+}
+
+template <class Arch>
+std::unique_ptr<WideAccel> make_for(TriangleTest test, bool robust) {
+  return robust ? make_for<Arch, true>(test) : make_for<Arch, false>(test);
 }
 
 }  // namespace

@@ -19,8 +19,8 @@ namespace volley::accel {
 class WideAccel {
  public:
   /// Kernels of `test` for `isa` (resolved: sse42, avx2 or avx512, supported by this CPU).
-  /// robust = false (watertight only) drops the slab padding: a mutation kept for the test
-  /// that shows the padding matters; never use it for answers. Throws std::invalid_argument.
+  /// robust = false drops the slab padding (Options::robust = false: faster, may miss a
+  /// triangle whose leaf box the ray only grazes). Throws std::invalid_argument.
   static std::unique_ptr<WideAccel> create(TriangleTest test, Isa isa, bool robust = true);
   virtual ~WideAccel() = default;
 

@@ -33,8 +33,9 @@ Runner register_info(CLI::App& app) {
                 desc.lights.empty() ? " (automatic)" : "");
     std::printf("camera      %s, %dx%d\n", desc.has_camera ? "from scene" : "automatic (frames the bounds)",
                 desc.settings.width, desc.settings.height);
-    std::printf("kernel      test %s, isa %s\n", std::string(to_string(info.test)).c_str(),
-                std::string(to_string(info.isa)).c_str());
+    std::printf("kernel      test %s, isa %s, %s box tests, %s triangle tests\n",
+                std::string(to_string(info.test)).c_str(), std::string(to_string(info.isa)).c_str(),
+                info.robust ? "robust (padded)" : "fast (unpadded)", info.reference_double ? "double" : "float");
     std::printf("bvh         %d-wide: %zu nodes (%.2f children each), %zu leaves, depth %zu, %.2f primitives/leaf, "
                 "SAH cost %.2f (binary binned-SAH tree: %.2f)\n",
                 info.width, info.nodes, info.mean_children, info.leaves, info.depth, info.mean_leaf_size, info.sah_cost,

@@ -4,10 +4,12 @@
 // timed), in a stable key=value line for scripts and a human summary after it:
 //
 //   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
-//          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N        (one line)
+//          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N robust=0|1
+//          reference=0|1                                                    (one line)
 //
 // packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
-// hits counts closest hits, or blocked rays with --occluded. Keys are only ever added.
+// hits counts closest hits, or blocked rays with --occluded; robust=0 with --fast-slabs,
+// reference=1 with --reference. Keys are only ever added.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -178,9 +180,10 @@ Runner register_trace(CLI::App& app) {
     const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
     std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu\n",
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d\n",
                 a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
-                a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count);
+                a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
+                info.reference_double ? 1 : 0);
     std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
                 "%.2f Mrays/s; %zu %s (%.1f%%); BVH built in %.3f s\n",
                 a.scene.c_str(), rays.size(), a.rays.c_str(), a.occluded ? "occlusion" : "closest hit", mode.c_str(),

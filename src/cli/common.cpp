@@ -5,6 +5,8 @@
 
 #include <unistd.h>
 
+#include "volley/accel.h"
+
 namespace volley::cli {
 
 void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
@@ -14,6 +16,13 @@ void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
   cmd.add_option("--isa", args.isa, "Kernel instruction set (VOLLEY_ISA also sets it)")
       ->check(CLI::IsMember({"auto", "scalar", "sse4.2", "avx2", "avx512"}))
       ->capture_default_str();
+  CLI::Option* fast = cmd.add_flag("--fast-slabs", args.fast_slabs,
+                                   "Plain BVH box tests, no padding against rounding (faster; may miss a triangle "
+                                   "whose box a ray only grazes)");
+  cmd.add_flag("--reference", args.reference,
+               "The accuracy reference: the scalar oracle with the triangle test in double precision and "
+               "robust box tests (implies --isa scalar)")
+      ->excludes(fast);
   cmd.add_option("--scenes", args.scenes,
                  "Folder of shared benchmark meshes (${scenes}/ in scene files); default $VOLLEY_SCENES or ../shared/scenes");
 }
@@ -22,6 +31,12 @@ Options kernel_options(const KernelArgs& args) {
   Options o;
   o.test = *parse_triangle_test(args.test);
   o.isa = *parse_isa(args.isa);
+  o.robust = !args.fast_slabs;
+  o.reference_double = args.reference;
+  if (args.reference && o.isa == Isa::automatic) o.isa = Isa::scalar;
+  if (args.reference && o.isa != Isa::scalar)
+    throw Error("--reference runs the scalar oracle in double precision: use it without --isa (or with --isa "
+                "scalar), not with --isa " + args.isa);
   return o;
 }
 

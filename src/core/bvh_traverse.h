@@ -51,8 +51,9 @@ inline BoxRay make_box_ray(const RayT<float>& ray) {
 /// true, `entry` is the distance where the ray enters the box (at least tmin). With
 /// Robust = true the exit distance (box exit or tmax, whichever is nearer) is padded by
 /// kSlabExitPad, so the test never culls a box that the exact ray meets within
-/// [tmin, tmax], rounding included; Robust = false is the plain, unpadded test (kept
-/// for comparison: tests show it misses boxes the exact ray touches).
+/// [tmin, tmax], rounding included; Robust = false is the plain, unpadded test
+/// (Options::robust = false: a little faster; tests show it misses boxes the exact ray
+/// touches).
 ///
 /// Zero direction components: inv_dir = ±inf, and when the origin lies exactly on a
 /// slab plane (bound - org = 0) the slab distance is 0 * inf = NaN. Picking the near
@@ -101,8 +102,11 @@ inline bool intersect_box(const BBox& b, const BoxRay& r, float tmax, float& ent
 /// still visited; the callback's own t < tmax test stays exact). AnyHit = true
 /// (occlusion): returns at the first leaf call that returns true.
 ///
-/// Robustness: the slab test is conservative (intersect_box<true>), and a ray in a
-/// box's face plane with a zero direction component is not culled. A ray with a
+/// Robustness: with Robust = true (the default) the slab test is conservative
+/// (intersect_box<true>) and so is the stack pruning (entry <= tmax * kSlabExitPad);
+/// Robust = false is the plain walk (Options::robust = false): unpadded boxes, entry <=
+/// tmax. Both keep the NaN-safe operand order, so a ray in a box's face plane with a zero
+/// direction component is not culled. A ray with a
 /// non-finite origin or direction component, or a NaN tmin or tmax, returns false
 /// without calling `leaf`. A zero direction terminates too (it visits the boxes that
 /// contain the origin). Precondition: the BVH has depth < kBvhMaxDepth (build_bvh
@@ -111,8 +115,9 @@ inline bool intersect_box(const BBox& b, const BoxRay& r, float tmax, float& ent
 /// traverse_leaves is the same walk with a callback per leaf instead of per primitive:
 /// leaf(node_index, tmax) for the leaf bvh.nodes[node_index] (for kernels that test a
 /// whole leaf at once, such as the SIMD triangle blocks).
-template <bool AnyHit, class LeafFn>
+template <bool AnyHit, bool Robust = true, class LeafFn>
 bool traverse_leaves(const Bvh& bvh, const RayT<float>& ray, LeafFn&& leaf) {
+  constexpr float pad = Robust ? kSlabExitPad : 1.0f;
   if (bvh.nodes.empty()) return false;
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(ray.org[a]) || !std::isfinite(ray.dir[a])) return false;
@@ -121,7 +126,7 @@ bool traverse_leaves(const Bvh& bvh, const RayT<float>& ray, LeafFn&& leaf) {
   const BoxRay r = make_box_ray(ray);
   float tmax = ray.tmax;
   float entry = 0.0f;
-  if (!intersect_box(bvh.nodes[0].box, r, tmax, entry)) return false;
+  if (!intersect_box<Robust>(bvh.nodes[0].box, r, tmax, entry)) return false;
 
   // Far children waiting to be visited, with their entry distances.
   std::uint32_t stack_node[kBvhMaxDepth];
@@ -136,8 +141,8 @@ bool traverse_leaves(const Bvh& bvh, const RayT<float>& ray, LeafFn&& leaf) {
       const std::uint32_t c0 = node.first_or_child;
       float e0 = 0.0f;
       float e1 = 0.0f;
-      const bool hit0 = intersect_box(bvh.nodes[c0].box, r, tmax, e0);
-      const bool hit1 = intersect_box(bvh.nodes[c0 + 1].box, r, tmax, e1);
+      const bool hit0 = intersect_box<Robust>(bvh.nodes[c0].box, r, tmax, e0);
+      const bool hit1 = intersect_box<Robust>(bvh.nodes[c0 + 1].box, r, tmax, e1);
       if (hit0 && hit1) {
         const bool swap = e1 < e0;
         assert(size < kBvhMaxDepth && "BVH deeper than kBvhMaxDepth");
@@ -162,15 +167,15 @@ bool traverse_leaves(const Bvh& bvh, const RayT<float>& ray, LeafFn&& leaf) {
     for (;;) {
       if (size == 0) return hit;
       --size;
-      if (stack_entry[size] <= tmax * kSlabExitPad) break;
+      if (stack_entry[size] <= tmax * pad) break;
     }
     index = stack_node[size];
   }
 }
 
-template <bool AnyHit, class LeafFn>
+template <bool AnyHit, bool Robust = true, class LeafFn>
 bool traverse(const Bvh& bvh, const RayT<float>& ray, LeafFn&& leaf) {
-  return traverse_leaves<AnyHit>(bvh, ray, [&](std::uint32_t node_index, float& tmax) {
+  return traverse_leaves<AnyHit, Robust>(bvh, ray, [&](std::uint32_t node_index, float& tmax) {
     // Every primitive of the leaf; the callback lowers tmax on a hit.
     const BvhNode& node = bvh.nodes[node_index];
     bool hit = false;

@@ -42,6 +42,8 @@ struct AccelInfo {
   double block_fill = 0.0;         ///< stored triangles / (blocks * block_width)
   TriangleTest test = TriangleTest::watertight;
   Isa isa = Isa::scalar;           ///< ISA actually used
+  bool robust = true;              ///< Options::robust: padded (conservative) slab tests
+  bool reference_double = false;   ///< Options::reference_double: double-precision triangle tests
 };
 
 /// Triangles and planar polygons, built once by commit(), then queried.
@@ -72,7 +74,9 @@ class VOLLEY_API Accel {
   /// planar within 1e-4 of its size, has a non-finite vertex or zero area.
   std::uint32_t add_polygon(const float* xyz, std::size_t vertex_count);
 
-  /// Builds the acceleration structure. Call again after adding more geometry.
+  /// Builds the acceleration structure. Call again after adding more geometry. Throws
+  /// Error (leaving the Accel unchanged) when the CPU lacks options.isa, or when
+  /// options.reference_double is set with an ISA other than scalar or with robust = false.
   void commit(const Options& options = {});
 
   /// Closest hit along the ray (tmin <= t < tmax), or a miss. A ray with a non-finite
