@@ -39,7 +39,7 @@ TEST_CASE("accel: bad input is rejected with a message") {
   CHECK_THROWS_WITH_AS(fresh.intersect(make_ray({0, 0, 0}, {0, 0, 1})), doctest::Contains("commit"), volley::Error);
 }
 
-TEST_CASE("accel: prim ids run across additions; closest of triangles and polygons wins") {
+TEST_CASE("accel: prim ids run across additions, and the closest of triangles and polygons wins") {
   for (auto test : kTests) {
     CAPTURE(std::string(volley::to_string(test)));
     Accel accel;

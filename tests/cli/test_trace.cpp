@@ -192,7 +192,7 @@ TEST_CASE("rays: writes the workload file, the same bytes for the same seed") {
   CHECK(bytes_of(d1) != bytes_of(d3));
 }
 
-TEST_CASE("trace: every mode and thread count gives the same answers; the line parses") {
+TEST_CASE("trace: every mode and thread count gives the same answers, and the line parses") {
   const fs::path primary = temp_path("trace_primary.vray"), shadow = temp_path("trace_shadow.vray");
   REQUIRE(run("rays " + kCornell + " --workload primary --width 40 --height 30 -o " + primary.string()).status == 0);
   REQUIRE(run("rays " + kCornell + " --workload shadow --width 40 --height 30 -o " + shadow.string()).status == 0);

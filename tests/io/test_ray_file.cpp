@@ -171,7 +171,7 @@ TEST_CASE("ray file: each kind of bad file is a LoadError naming the file and wh
   CHECK(contains(load_error([&] { read_hits(hits_cut); }), "records of 16 bytes, but only 20 bytes"));
 }
 
-TEST_CASE("ray file: writing into a missing folder creates it; an unwritable path throws") {
+TEST_CASE("ray file: writing into a missing folder creates it, an unwritable path throws") {
   TempDir dir;
   const auto nested = dir.path() / "a" / "b" / "r.vray";
   write_rays(nested, std::vector<Ray>(3, Ray{{0, 0, 0}, 0, {0, 0, 1}, kInf}));

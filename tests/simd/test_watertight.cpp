@@ -100,7 +100,7 @@ TEST_CASE_TEMPLATE("watertight kernel: no leaks at shared vertices and edges of 
   }
 }
 
-TEST_CASE_TEMPLATE("watertight kernel: axis-aligned rays on an integer heightfield never miss; fallback counted",
+TEST_CASE_TEMPLATE("watertight kernel: axis-aligned rays on an integer heightfield never miss, fallback counted",
                    Arch, volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512) {
   if (skip_isa<Arch>()) return;
   // Heightfield over [0, 8]^2 with integer heights; quads split on alternating diagonals.
