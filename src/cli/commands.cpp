@@ -24,6 +24,7 @@ void register_commands(CLI::App& app) {
   add(app, register_info);
   add(app, register_rays);
   add(app, register_trace);
+  add(app, register_accuracy);
 }
 
 int run_selected(const CLI::App&) {

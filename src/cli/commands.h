@@ -20,5 +20,6 @@ Runner register_render(CLI::App& app);
 Runner register_info(CLI::App& app);
 Runner register_rays(CLI::App& app);
 Runner register_trace(CLI::App& app);
+Runner register_accuracy(CLI::App& app);
 
 }  // namespace volley::cli
