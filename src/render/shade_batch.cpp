@@ -28,7 +28,6 @@ struct V3 {
 
 V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(const V3& a, const V3& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
 V3 operator*(const B& s, const V3& a) { return {s * a.x, s * a.y, s * a.z}; }
 V3 operator*(const V3& a, const B& s) { return {a.x * s, a.y * s, a.z * s}; }
 V3 abs(const V3& a) { return {xsimd::abs(a.x), xsimd::abs(a.y), xsimd::abs(a.z)}; }
