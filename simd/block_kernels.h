@@ -46,6 +46,23 @@ struct TestOfT<Arch, TriangleTest::watertight> {
 /// The vectorized test of `Test` on Arch.
 template <class Arch, TriangleTest Test>
 using TestOf = typename TestOfT<Arch, Test>::type;
+
+/// Candidates of a division-free test (moller.h) carry t det, u det, v det with det's sign
+/// folded in and den = |det|; the quotients are taken only for hits. The other tests'
+/// candidates carry t, u, v.
+template <class Cand>
+concept DetScaled = requires(const Cand& c) {
+  c.den;
+};
+
+/// t of the candidate lanes (a true division for a det-scaled test).
+template <class Cand>
+[[gnu::always_inline]] inline auto cand_t(const Cand& c) {
+  if constexpr (DetScaled<Cand>)
+    return c.t / c.den;
+  else
+    return c.t;
+}
 }  // namespace detail
 
 /// One ray against runs of blocks of W = kLanes<Arch> triangles.
@@ -93,24 +110,29 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   static_assert(B::size == W, "kLanes<Arch> must be the float lane count");
+  constexpr bool kScaled = detail::DetScaled<typename T::Cand>;
   const auto rays = T::broadcast(ray);
   float upper = hit.t < ray.ray.tmax ? hit.t : ray.ray.tmax;
   B upper_b(upper);
+  // The winner so far: u, v (det-scaled tests: u det, v det and |det|, divided at the end).
+  float win_u = 0.0f, win_v = 0.0f, win_den = 1.0f;
+  std::uint32_t win_prim = kInvalidPrim;
   for (std::uint32_t b = 0; b < count; ++b) {
     const Block& block = blocks[b];
     // Test all W triangles against the current upper end.
     const auto cand = T::test(rays, T::load_block(block, rays), upper_b);
     std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
     if (bits == 0) continue;
-    alignas(64) float ts[W], us[W], vs[W];
+    alignas(64) float ts[W], us[W], vs[W], dens[W];
     cand.t.store_aligned(ts);
     cand.u.store_aligned(us);
     cand.v.store_aligned(vs);
+    if constexpr (kScaled) cand.den.store_aligned(dens);
     // Take hits in lane order, shrinking upper after each (the oracle's loop); a lane
     // hit against a larger upper may no longer be once an earlier lane shrank it.
     int lane = std::countr_zero(bits);
     for (;;) {
-      upper = ts[lane];
+      upper = kScaled ? ts[lane] / dens[lane] : ts[lane];
       upper_b = B(upper);
       bits &= ~((2u << lane) - 1u);  // lanes after `lane`
       if (bits == 0) break;
@@ -118,11 +140,15 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
       if (bits == 0) break;
       lane = std::countr_zero(bits);
     }
-    hit.t = ts[lane];
-    hit.u = us[lane];
-    hit.v = vs[lane];
-    hit.prim = block.prim[lane];
+    win_u = us[lane], win_v = vs[lane];
+    if constexpr (kScaled) win_den = dens[lane];
+    win_prim = block.prim[lane];
   }
+  if (win_prim == kInvalidPrim) return;
+  hit.t = upper;
+  hit.u = kScaled ? win_u / win_den : win_u;
+  hit.v = kScaled ? win_v / win_den : win_v;
+  hit.prim = win_prim;
 }
 
 template <class Arch, TriangleTest Test>
@@ -148,6 +174,7 @@ void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, 
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
+  constexpr bool kScaled = detail::DetScaled<typename T::Cand>;
   const RayPacket<K>& rays = prepared.rays;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
@@ -157,7 +184,8 @@ void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, 
     // Inactive lanes search [tmin, -inf): never hit.
     B upper = xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
                             B(-std::numeric_limits<float>::infinity()));
-    B hu = B::load_aligned(hits.u + c), hv = B::load_aligned(hits.v + c);
+    // u, v of each lane's winner (det-scaled tests: u det, v det and |det|, divided at the end).
+    B hu = B::load_aligned(hits.u + c), hv = B::load_aligned(hits.v + c), hden(1.0f);
     B hp = detail::load_ids<Arch>(hits.prim + c);
     M any_hit(false);
     // Triangles in block order, each broadcast to all lanes; hits only shrink upper.
@@ -165,15 +193,21 @@ void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, 
       const Block& block = blocks[b];
       for (int j = 0; j < W; ++j) {
         const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-        upper = xsimd::select(cand.valid, cand.t, upper);
+        if (xsimd::none(cand.valid)) continue;
+        upper = xsimd::select(cand.valid, detail::cand_t(cand), upper);
         hu = xsimd::select(cand.valid, cand.u, hu);
         hv = xsimd::select(cand.valid, cand.v, hv);
+        if constexpr (kScaled) hden = xsimd::select(cand.valid, cand.den, hden);
         hp = xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), hp);
         any_hit = any_hit | cand.valid;
       }
     }
     if (xsimd::none(any_hit)) continue;
     xsimd::select(any_hit, upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
+    if constexpr (kScaled) {
+      // Lanes without a hit keep their stored u, v (divided by 1: unchanged).
+      hu = hu / hden, hv = hv / hden;
+    }
     hu.store_aligned(hits.u + c);
     hv.store_aligned(hits.v + c);
     hp.store_aligned(reinterpret_cast<float*>(hits.prim + c));
@@ -197,9 +231,11 @@ void PacketKernels<Arch, Test, K>::intersect_triangle(const PreparedPacket<K>& p
                                   B(-std::numeric_limits<float>::infinity()));
     const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
     if (xsimd::none(cand.valid)) continue;
-    xsimd::select(cand.valid, cand.t, ht).store_aligned(hits.t + c);
-    xsimd::select(cand.valid, cand.u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
-    xsimd::select(cand.valid, cand.v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
+    xsimd::select(cand.valid, detail::cand_t(cand), ht).store_aligned(hits.t + c);
+    B u = cand.u, v = cand.v;
+    if constexpr (detail::DetScaled<typename T::Cand>) u = u / cand.den, v = v / cand.den;
+    xsimd::select(cand.valid, u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
+    xsimd::select(cand.valid, v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
     xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
         .store_aligned(reinterpret_cast<float*>(hits.prim + c));
   }

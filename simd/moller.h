@@ -1,7 +1,12 @@
 // Möller–Trumbore (1997) ray/triangle test on float lanes: the 3x3 barycentric system
-// solved by Cramer's rule. The SIMD twin of src/core/triangle_moller.h: the same float
-// operations in the same order (no FMA, true divisions), so every lane gives the
-// oracle's hit/miss and t, u, v bit for bit.
+// solved by Cramer's rule, division-free. The SIMD twin of src/core/triangle_moller.h:
+// the same float operations in the same order, fused where the oracle fuses (FMA;
+// kMollerFused), so every lane gives the oracle's hit/miss and t, u, v bit for bit.
+//
+// The hit decision uses the determinants themselves, with det's sign folded in:
+// u det >= 0, v det >= 0, (u + v) det <= |det|, tmin |det| <= t det < upper |det|. The
+// quotients are true divisions done only for hits (block_kernels.h): t of each accepted
+// lane, u and v of the final winner.
 #pragma once
 #include <limits>
 
@@ -12,11 +17,20 @@
 
 namespace volley::simd::detail {
 
+/// Whether the Möller–Trumbore kernels fuse their products: as the oracle does
+/// (core::kMollerFused). SSE4.2 has no FMA instruction and fuses lane by lane through
+/// std::fma (fused_mul_add), exact but slow.
+/// (Not read from core/triangle_moller.h, which the per-ISA files must not include;
+/// tests/simd/test_kernels_oracle.cpp asserts that the two agree.)
+template <class Arch>
+inline constexpr bool kMollerFused = true;
+
 /// Möller–Trumbore on kLanes<Arch> (ray, triangle) pairs: one ray against a block, or
 /// one triangle against a packet's lanes. Reads MollerBlock<kLanes<Arch>>.
 template <class Arch>
 struct MollerTest {
   static constexpr int W = kLanes<Arch>;
+  static constexpr bool kFused = kMollerFused<Arch>;
   using Block = MollerBlock<W>;
   using B = FloatB<Arch>;
   using M = MaskB<Arch>;
@@ -26,11 +40,12 @@ struct MollerTest {
   struct Tris {
     B v0x, v0y, v0z, e1x, e1y, e1z, ne2x, ne2y, ne2z, nx, ny, nz;
   };
-  /// Candidate hits: `valid` lanes are hit with tmin <= t < upper; t, u, v are
-  /// meaningful in those lanes only.
+  /// Candidate hits, det-scaled: `valid` lanes are hit with tmin <= t < upper; t, u, v
+  /// are t det, u det, v det with det's sign folded in and den = |det| (t = t / den ...),
+  /// meaningful in valid lanes only.
   struct Cand {
     M valid;
-    B t, u, v;
+    B t, u, v, den;
   };
 
   [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
@@ -47,6 +62,29 @@ struct MollerTest {
   /// The lanes of `c` still hit when the upper end shrinks to `upper` (<= the one test()
   /// saw): exactly what test() would have answered for it.
   [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
+
+ private:
+  /// a b + c: one rounding when fused (the oracle's std::fma), two otherwise.
+  [[gnu::always_inline]] inline static B mul_add(B a, B b, B c) {
+    if constexpr (kFused)
+      return fused_mul_add<Arch>(a, b, c);
+    else
+      return a * b + c;
+  }
+  /// a b - c d: the oracle's diff_of_products (fused: fma(a, b, -(c d))).
+  [[gnu::always_inline]] inline static B diff_of_products(B a, B b, B c, B d) {
+    if constexpr (kFused)
+      return fused_mul_sub<Arch>(a, b, c * d);
+    else
+      return a * b - c * d;
+  }
+  /// ax bx + ay by + az bz, left to right: the oracle's dot3.
+  [[gnu::always_inline]] inline static B dot3(B ax, B ay, B az, B bx, B by, B bz) {
+    if constexpr (kFused)
+      return mul_add(az, bz, mul_add(ay, by, ax * bx));
+    else
+      return ax * bx + ay * by + az * bz;
+  }
 };
 
 template <class Arch>
@@ -82,33 +120,36 @@ auto MollerTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris
 
 template <class Arch>
 auto MollerTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
-  const B zero(0.0f), one(1.0f);
+  const B zero(0.0f);
   // c = p0 - org, the right-hand side of the system.
   const B cx = tri.v0x - r.ox, cy = tri.v0y - r.oy, cz = tri.v0z - r.oz;
-  // det = dir . n; fails for 0, Inf and NaN (parallel ray, degenerate triangle, padding).
-  const B det = r.dx * tri.nx + r.dy * tri.ny + r.dz * tri.nz;
-  M valid = finite_nonzero<Arch>(det);
-  // Cramer's rule with rr = dir x c: u det = -(e2 . rr), v det = e1 . rr, t det = c . n.
-  // -(e2 . rr) = (-e2) . rr exactly (negation is exact), so the block stores -e2.
-  const B rx = r.dy * cz - cy * r.dz;
-  const B ry = r.dz * cx - cz * r.dx;
-  const B rz = r.dx * cy - cx * r.dy;
-  const B nu = tri.ne2x * rx + tri.ne2y * ry + tri.ne2z * rz;
-  const B nv = tri.e1x * rx + tri.e1y * ry + tri.e1z * rz;
-  const B nt = cx * tri.nx + cy * tri.ny + cz * tri.nz;
-  if (xsimd::none(valid)) return {valid, nt, nu, nv};
-  // The oracle's true divisions and its comparisons, written so NaN fails.
-  const B u = nu / det;
-  const B v = nv / det;
-  valid = valid & (u >= zero) & (v >= zero) & (u + v <= one);
-  const B t = nt / det;
-  valid = valid & (r.tmin <= t) & (t < upper);
-  return {valid, t, u, v};
+  // det = dir . n; rr = dir x c; Cramer: u det = (-e2) . rr, v det = e1 . rr, t det = c . n.
+  const B det = dot3(r.dx, r.dy, r.dz, tri.nx, tri.ny, tri.nz);
+  const B rx = diff_of_products(r.dy, cz, cy, r.dz);
+  const B ry = diff_of_products(r.dz, cx, cz, r.dx);
+  const B rz = diff_of_products(r.dx, cy, cx, r.dy);
+  const B un = dot3(tri.ne2x, tri.ne2y, tri.ne2z, rx, ry, rz);
+  const B vn = dot3(tri.e1x, tri.e1y, tri.e1z, rx, ry, rz);
+  const B tn = dot3(cx, cy, cz, tri.nx, tri.ny, tri.nz);
+  // Fold det's sign in (negation is exact): the tests below are those of u, v, t >= ...
+  const B sign = det & B(-0.0f);
+  const B den = det ^ sign;
+  const B u = un ^ sign, v = vn ^ sign, t = tn ^ sign;
+  // det finite and nonzero (parallel ray, degenerate triangle, padding and NaN fail);
+  // every comparison is false for NaN.
+  M valid;
+  if constexpr (kHasMaskRegisters<Arch>)
+    valid = finite_nonzero<Arch>(det);
+  else
+    valid = (den > zero) & (den <= B(std::numeric_limits<float>::max()));
+  valid = valid & (u >= zero) & (v >= zero) & (u + v <= den);
+  valid = valid & (r.tmin * den <= t) & (t < upper * den);
+  return {valid, t, u, v, den};
 }
 
 template <class Arch>
 auto MollerTest<Arch>::accept(const Cand& c, B upper) -> M {
-  return c.valid & (c.t < upper);
+  return c.valid & (c.t < upper * c.den);
 }
 
 }  // namespace volley::simd::detail

@@ -1,6 +1,6 @@
 // Scalar oracle: ray/triangle by the notes' algorithm 2, the 3x3 barycentric system
 // solved by Cramer's rule (Moller & Trumbore 1997, "Fast, minimum storage ray/triangle
-// intersection", JGT 2(1)).
+// intersection", JGT 2(1)), in a division-free form.
 #pragma once
 #include <cmath>
 #include <limits>
@@ -9,45 +9,82 @@
 
 namespace volley::core {
 
+/// The default formulation of intersect_moller: fused (std::fma), as the AVX2 and AVX-512
+/// kernels compute it. The SSE4.2 kernels (no FMA instruction) match Fused = false.
+inline constexpr bool kMollerFused = true;
+
+namespace moller_detail {
+
+/// a b + c: rounded once when Fused (std::fma), twice otherwise.
+template <bool Fused, class T>
+T mul_add(T a, T b, T c) {
+  if constexpr (Fused)
+    return std::fma(a, b, c);
+  else
+    return a * b + c;
+}
+
+/// a b - c d; fused: fma(a, b, -(c d)), the product c d rounded.
+template <bool Fused, class T>
+T diff_of_products(T a, T b, T c, T d) {
+  return mul_add<Fused>(a, b, -(c * d));
+}
+
+/// a . b, left to right (as glm::dot when not fused).
+template <bool Fused, class T>
+T dot3(const Vec3<T>& a, const Vec3<T>& b) {
+  return mul_add<Fused>(a.z, b.z, mul_add<Fused>(a.y, b.y, a.x * b.x));
+}
+
+}  // namespace moller_detail
+
 /// Intersects `ray` with the triangle (p0, p1, p2), both facings (no culling).
 ///
 /// Solves  [-(p1-p0)  -(p2-p0)  dir] [u v t]^T = p0 - org  by Cramer's rule and reports a
-/// hit iff det != 0 (finite), u >= 0, v >= 0, u + v <= 1 and tmin <= t < tmax.
-/// On a hit writes `hit` = {t, u, v} (hit point = (1-u-v) p0 + u p1 + v p2) and returns true;
-/// on a miss returns false and leaves `hit` untouched.
+/// hit iff det != 0 (finite), u >= 0, v >= 0, u + v <= 1 and tmin <= t < tmax, decided
+/// division-free on the scaled values: with s = sign(det), u det s >= 0, v det s >= 0,
+/// (u det + v det) s <= |det|, tmin |det| <= t det s < tmax |det| (each product and sum
+/// rounded once). On a hit writes `hit` = {t, u, v} = the scaled values over det, true
+/// divisions (hit point = (1-u-v) p0 + u p1 + v p2) and returns true; on a miss returns
+/// false and leaves `hit` untouched. The scaled range test can let t land an ulp outside
+/// [tmin, tmax) by the rounding of the final division; t >= 0 whenever tmin >= 0.
 ///
 /// The determinants are the triple products of Moller-Trumbore, factored as in Embree's
 /// Moller intersector so the normal n = (p1-p0) x (p2-p0) is computed once: a triangle with
-/// n == 0 exactly (is_degenerate) gets det == 0 and never hits. The quotients are true
-/// divisions (no reciprocal): this is the accuracy reference for the SIMD twins.
+/// n == 0 exactly (is_degenerate) gets det == 0 and never hits. With `Fused` (default,
+/// kMollerFused) the dot and cross products use std::fma as the AVX2/AVX-512 kernels'
+/// FMA instructions do; n and the edges are never fused (the kernels' blocks store them).
+/// This is the accuracy reference for the SIMD twins (bit-identical lanes).
 /// NaN or Inf anywhere in the input makes a comparison below fail: no hit, never NaN out.
 /// Pure function, thread safe.
-template <class T>
-bool intersect_moller(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2,
-                      TriHit<T>& hit) {
+template <class T, bool Fused = kMollerFused>
+bool intersect_moller(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
+  using namespace moller_detail;
   const Vec3<T> e1 = p1 - p0;
-  const Vec3<T> e2 = p2 - p0;
-  const Vec3<T> n = glm::cross(e1, e2);
+  const Vec3<T> ne2 = -(p2 - p0);
+  const Vec3<T> n = glm::cross(e1, p2 - p0);
   const Vec3<T> c = p0 - ray.org;  // right-hand side of the system
+  const Vec3<T>& d = ray.dir;
 
   // det[-e1 -e2 d] = d . (e1 x e2). Written so NaN fails: parallel ray, degenerate
   // triangle (n == 0), overflow (Inf) and NaN input all leave here.
-  const T det = glm::dot(ray.dir, n);
-  if (!(std::abs(det) > 0 && std::abs(det) <= std::numeric_limits<T>::max())) return false;
+  const T det = dot3<Fused>(d, n);
+  const T den = std::abs(det);
+  if (!(den > 0 && den <= std::numeric_limits<T>::max())) return false;
 
   // Cramer: replace one column by c. With r = d x c:
   //   det[c -e2 d] = -e2 . r,   det[-e1 c d] = e1 . r,   det[-e1 -e2 c] = c . n.
-  const Vec3<T> r = glm::cross(ray.dir, c);
-  const T u = -glm::dot(e2, r) / det;
-  const T v = glm::dot(e1, r) / det;
+  const Vec3<T> r(diff_of_products<Fused>(d.y, c.z, c.y, d.z), diff_of_products<Fused>(d.z, c.x, c.z, d.x),
+                  diff_of_products<Fused>(d.x, c.y, c.x, d.y));
+  T u = dot3<Fused>(ne2, r), v = dot3<Fused>(e1, r), t = dot3<Fused>(c, n);
+  // Fold det's sign in (exact): the tests become those of u, v, t against |det|.
+  if (det < 0) u = -u, v = -v, t = -t;
   // Half-plane tests; each comparison is false for NaN.
-  if (!(u >= 0 && v >= 0 && u + v <= 1)) return false;
-
-  const T t = glm::dot(c, n) / det;
+  if (!(u >= 0 && v >= 0 && u + v <= den)) return false;
   // Half-open range tmin <= t < tmax; false for NaN.
-  if (!(ray.tmin <= t && t < ray.tmax)) return false;
+  if (!(ray.tmin * den <= t && t < ray.tmax * den)) return false;
 
-  hit = {t, u, v};
+  hit = {t / den, u / den, v / den};
   return true;
 }
 

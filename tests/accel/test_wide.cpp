@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "accel/wide_accel.h"
+#include "accel_test_util.h"
 #include "core/bvh.h"
 #include "core/triangle.h"
 #include "io/obj_loader.h"
@@ -27,233 +28,7 @@ using volley::Isa;
 using volley::Ray;
 using volley::TriangleTest;
 
-namespace {
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-const TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};
-
-/// The SIMD ISAs this CPU runs (a message names the others).
-std::vector<Isa> simd_isas() {
-  std::vector<Isa> out;
-  for (Isa isa : {Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (volley::simd::cpu_has(isa))
-      out.push_back(isa);
-    else
-      MESSAGE("skipped: this CPU lacks " << std::string(volley::to_string(isa)));
-  }
-  return out;
-}
-
-/// Triangles as packed xyz (9 floats each), with an indexed form for Accel.
-struct Soup {
-  std::vector<float> xyz;
-  void add(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
-    xyz.insert(xyz.end(), {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z});
-  }
-  std::size_t size() const { return xyz.size() / 9; }
-  glm::vec3 vertex(std::size_t i, int k) const {
-    return {xyz[9 * i + 3 * k], xyz[9 * i + 3 * k + 1], xyz[9 * i + 3 * k + 2]};
-  }
-  Accel accel(TriangleTest test, Isa isa) const {
-    Accel a;
-    std::vector<std::uint32_t> idx(3 * size());
-    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
-    a.add_triangles(xyz.data(), 3 * size(), idx.data(), size());
-    a.commit({test, isa});
-    return a;
-  }
-  std::vector<volley::core::BBox> boxes() const {
-    std::vector<volley::core::BBox> out(size());
-    for (std::size_t i = 0; i < size(); ++i) {
-      if (volley::core::is_degenerate(vertex(i, 0), vertex(i, 1), vertex(i, 2))) continue;
-      for (int k = 0; k < 3; ++k) out[i].extend(vertex(i, k));
-    }
-    return out;
-  }
-};
-
-Ray make_ray(glm::vec3 o, glm::vec3 d, float tmin = 0.0f, float tmax = kInf) {
-  return Ray{{o.x, o.y, o.z}, tmin, {d.x, d.y, d.z}, tmax};
-}
-
-bool finite_ray(const Ray& r) {
-  for (int a = 0; a < 3; ++a)
-    if (!std::isfinite(r.org[a]) || !std::isfinite(r.dir[a])) return false;
-  return !std::isnan(r.tmin) && !std::isnan(r.tmax);
-}
-
-/// Closest hit by brute force with the scalar oracle (the oracle's loop: a triangle
-/// replaces the hit when t < the current bound). Rays the API rejects miss.
-Hit brute_force(const Soup& soup, TriangleTest test, const Ray& ray) {
-  Hit best;
-  if (!finite_ray(ray)) return best;
-  const glm::vec3 o(ray.org[0], ray.org[1], ray.org[2]), d(ray.dir[0], ray.dir[1], ray.dir[2]);
-  float upper = ray.tmax;
-  for (std::size_t i = 0; i < soup.size(); ++i) {
-    volley::core::TriHit<float> h;
-    if (volley::core::intersect_triangle(test, volley::core::RayT<float>{o, ray.tmin, d, upper}, soup.vertex(i, 0),
-                                         soup.vertex(i, 1), soup.vertex(i, 2), h)) {
-      upper = h.t;
-      best = {h.t, h.u, h.v, static_cast<std::uint32_t>(i)};
-    }
-  }
-  return best;
-}
-
-/// Same answer: the same prim, or both hits at the same t (a tie between triangles).
-bool agree(const Hit& got, const Hit& want) {
-  return got.prim == want.prim ? (!got.hit() || got.t == want.t) : (got.hit() && want.hit() && got.t == want.t);
-}
-
-/// Counts disagreements of every query form of `accel` with `want` (per ray), and checks
-/// the packet contract: inactive lanes untouched, occlusion masks within the active lanes.
-struct FormCheck {
-  std::size_t single = 0, occluded = 0, packet = 0, packet_occluded = 0, stream = 0, stream_occluded = 0;
-  std::size_t inactive_written = 0, lanes = 0;
-  std::size_t total() const {
-    return single + occluded + packet + packet_occluded + stream + stream_occluded + inactive_written;
-  }
-};
-
-template <int K>
-void check_packets(const Accel& accel, const std::vector<Ray>& rays, const std::vector<Hit>& want, std::mt19937& rng,
-                   FormCheck& f) {
-  volley::RayPacket<K> p;
-  volley::HitPacket<K> h;
-  for (std::size_t first = 0; first < rays.size(); first += K) {
-    // Full packets mostly; partial ones (1, K - 1 lanes) and random inactive lanes too.
-    int count = static_cast<int>(std::min<std::size_t>(K, rays.size() - first));
-    const int shape = static_cast<int>(rng() % 8);
-    if (shape == 0) count = 1;
-    if (shape == 1 && count > 1) count = K - 1 < count ? K - 1 : count;
-    volley::load(p, rays.data() + first, count);
-    if (shape == 2) p.active &= static_cast<std::uint32_t>(rng()) | 1u;
-    // Inactive lanes hold a sentinel that must survive.
-    volley::reset(h);
-    for (int i = 0; i < K; ++i)
-      if (!((p.active >> i) & 1u)) h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
-    accel.intersect(p, h);
-    const std::uint32_t mask = accel.occluded(p);
-    for (int i = 0; i < K; ++i) {
-      if (!((p.active >> i) & 1u)) {
-        f.inactive_written += h.t[i] != 12345.0f || h.prim[i] != 0xdeadbeefu || ((mask >> i) & 1u);
-        continue;
-      }
-      ++f.lanes;
-      const Hit& w = want[first + static_cast<std::size_t>(i)];
-      f.packet += !agree(volley::hit_of(h, i), w);
-      f.packet_occluded += ((mask >> i) & 1u) != (w.hit() ? 1u : 0u);
-    }
-  }
-}
-
-FormCheck check_forms(const Accel& accel, const std::vector<Ray>& rays, const std::vector<Hit>& want,
-                      std::uint32_t seed) {
-  FormCheck f;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    f.single += !agree(accel.intersect(rays[i]), want[i]);
-    f.occluded += accel.occluded(rays[i]) != want[i].hit();
-  }
-  std::mt19937 rng(seed);
-  check_packets<4>(accel, rays, want, rng, f);
-  check_packets<8>(accel, rays, want, rng, f);
-  check_packets<16>(accel, rays, want, rng, f);
-  // Streams of odd lengths, at odd offsets.
-  std::vector<Hit> hits(rays.size());
-  std::vector<std::uint8_t> blocked(rays.size(), 7);
-  for (std::size_t first = 0; first < rays.size();) {
-    const std::size_t n = std::min<std::size_t>(rays.size() - first, 1 + rng() % 70);
-    accel.intersect(rays.data() + first, n, hits.data() + first);
-    accel.occluded(rays.data() + first, n, blocked.data() + first);
-    first += n;
-  }
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    f.stream += !agree(hits[i], want[i]);
-    f.stream_occluded += blocked[i] != (want[i].hit() ? 1 : 0);
-  }
-  return f;
-}
-
-void report(const FormCheck& f, const std::string& what) {
-  CAPTURE(what);
-  CHECK(f.single == 0);
-  CHECK(f.occluded == 0);
-  CHECK(f.packet == 0);
-  CHECK(f.packet_occluded == 0);
-  CHECK(f.stream == 0);
-  CHECK(f.stream_occluded == 0);
-  CHECK(f.inactive_written == 0);
-}
-
-/// Random soup of n small triangles in [-10, 10]^3.
-Soup random_soup(int n, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> pos(-10.0f, 10.0f), small(-1.0f, 1.0f);
-  Soup soup;
-  for (int i = 0; i < n; ++i) {
-    const glm::vec3 c(pos(rng), pos(rng), pos(rng));
-    soup.add(c + glm::vec3(small(rng), small(rng), small(rng)), c + glm::vec3(small(rng), small(rng), small(rng)),
-             c + glm::vec3(small(rng), small(rng), small(rng)));
-  }
-  return soup;
-}
-
-/// Rays of every kind the traversals distinguish, in runs of 16: incoherent (mixed
-/// octants: the per-lane packet walk), pinhole 4x4 blocks (one octant: the frustum walk),
-/// axis-aligned blocks (zero components: the per-lane one-octant walk), converging
-/// shadow-like rays with a finite tmax, and runs with NaN / Inf lanes among good ones.
-std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> pos(-extent, extent), unit(-1.0f, 1.0f);
-  std::vector<Ray> rays;
-  for (int r = 0; r < runs; ++r) {
-    const int kind = r % 5;
-    const glm::vec3 eye(pos(rng) * 2.0f, pos(rng) * 2.0f, pos(rng) * 2.0f);
-    const glm::vec3 look = glm::vec3(pos(rng), pos(rng), pos(rng)) * 0.5f - eye;
-    const glm::vec3 u = glm::normalize(glm::cross(look, glm::vec3(0.3f, 1.0f, 0.1f))) * 0.02f * extent;
-    const glm::vec3 v = glm::normalize(glm::cross(u, look)) * 0.02f * extent;
-    for (int i = 0; i < 16; ++i) {
-      const float x = float(i % 4) - 1.5f, y = float(i / 4) - 1.5f;
-      switch (kind) {
-        case 0:
-          rays.push_back(make_ray(eye, glm::vec3(pos(rng), pos(rng), pos(rng)) - eye));
-          break;
-        case 1:
-          rays.push_back(make_ray(eye, look + x * u + y * v));
-          break;
-        case 2: {
-          const int axis = r / 5 % 3;
-          glm::vec3 d(0.0f);
-          d[axis] = (r / 15) % 2 ? 1.0f : -1.0f;
-          glm::vec3 o(pos(rng), pos(rng), pos(rng));
-          o[axis] = -d[axis] * extent * 2.0f;
-          rays.push_back(make_ray(o, d));
-          break;
-        }
-        case 3: {
-          // From points near the packet's own "surface" toward one light, interval [0, 1).
-          const glm::vec3 o = eye * 0.25f + x * u * 5.0f + y * v * 5.0f;
-          rays.push_back(make_ray(o, look * 1.5f + glm::vec3(0, 0.1f * x, 0), 0.0f, 1.0f));
-          break;
-        }
-        default: {
-          Ray ray = make_ray(eye, look + x * u + y * v);
-          if (i == 3) ray.dir[1] = kNaN;
-          if (i == 7) ray.org[0] = kInf;
-          if (i == 11) ray.tmax = kNaN;
-          if (i == 12) ray.dir[2] = -kInf;
-          if (i == 13) ray.tmin = 2.0f, ray.tmax = 1.0f;  // empty interval
-          rays.push_back(ray);
-          break;
-        }
-      }
-    }
-  }
-  return rays;
-}
-
-}  // namespace
+using namespace accel_test;
 
 TEST_CASE("wide: every query form equals brute force on random soups (every ISA, test, K)") {
   const Soup soup = random_soup(1500, 11);
@@ -267,12 +42,11 @@ TEST_CASE("wide: every query form equals brute force on random soups (every ISA,
     CHECK(hits < rays.size() * 4 / 5);
     for (Isa isa : simd_isas()) {
       const Accel accel = soup.accel(test, isa);
-      report(check_forms(accel, rays, want, 3), std::string(volley::to_string(test)) + " " +
-                                                    std::string(volley::to_string(isa)));
+      report(check_forms(accel, rays, want, 3),
+             std::string(volley::to_string(test)) + " " + std::string(volley::to_string(isa)));
     }
     // The scalar oracle's own packet and stream forms.
-    report(check_forms(soup.accel(test, Isa::scalar), rays, want, 4),
-           std::string(volley::to_string(test)) + " scalar");
+    report(check_forms(soup.accel(test, Isa::scalar), rays, want, 4), std::string(volley::to_string(test)) + " scalar");
   }
 }
 
@@ -288,7 +62,10 @@ TEST_CASE("wide: NaN and Inf lanes miss without disturbing the other lanes of th
       volley::load(clean, rays.data() + first, 16);
       dirty = clean;
       for (int i = 0; i < 16; i += 3) {  // poison every third lane in a different way
-        if (i % 2) dirty.dx[i] = kNaN; else dirty.oy[i] = -kInf;
+        if (i % 2)
+          dirty.dx[i] = kNaN;
+        else
+          dirty.oy[i] = -kInf;
       }
       volley::reset(h_clean);
       volley::reset(h_dirty);
@@ -361,7 +138,8 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   for (int i = 0; i < 400; ++i) {
     const float scale = std::ldexp(1.0f, static_cast<int>(rng() % 12) - 6);
     const glm::vec3 c = 40.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
-    soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)), c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
+    soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
+             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
              c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)));
   }
   std::vector<Ray> rays;

@@ -42,8 +42,8 @@ inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 inline constexpr TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};
 
 /// t, u, v of the kernels may differ from the oracle's by at most this many ulps. The
-/// kernels perform the oracle's float operations in the same order (no FMA, true
-/// divisions), so the bound is 0: bit-identical.
+/// kernels perform the oracle's float operations in the same order (fused exactly where it
+/// fuses, true divisions), so the bound is 0: bit-identical.
 inline constexpr std::uint32_t kMaxUlps = 0;
 
 /// True (and a MESSAGE) when this CPU cannot run Arch's kernels: the test case returns.

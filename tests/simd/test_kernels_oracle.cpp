@@ -155,3 +155,36 @@ TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: watertigh
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::watertight>(33);
 }
+
+// The bit-identity above is what proves the Moller kernels really fuse (an xsimd::fma that
+// silently splits into a multiply and an add, as 8.1's does on AVX-512, would pass any
+// tolerance test): it can only fail if the fused and unfused oracles differ on such rays.
+static_assert(volley::simd::detail::kMollerFused<volley::simd::Sse42> == volley::core::kMollerFused &&
+                  volley::simd::detail::kMollerFused<volley::simd::Avx2> == volley::core::kMollerFused &&
+                  volley::simd::detail::kMollerFused<volley::simd::Avx512> == volley::core::kMollerFused,
+              "the Moller kernels must fuse exactly where the oracle does");
+
+TEST_CASE("moller oracle: the fused and unfused variants differ, so bit-identity checks the FMA") {
+  Generator g(44);
+  std::size_t hits = 0, differ = 0;
+  for (int leaf = 0; leaf < 64; ++leaf) {
+    const Soup s = g.triangles(16);
+    for (int k = 0; k < 64; ++k) {
+      const std::size_t t = static_cast<std::size_t>(g.integer(0, static_cast<int>(s.size()) - 1));
+      const Ray ray = g.aimed(s, t);
+      const volley::core::RayT<float> r{V3(ray.org[0], ray.org[1], ray.org[2]), ray.tmin,
+                                        V3(ray.dir[0], ray.dir[1], ray.dir[2]), ray.tmax};
+      volley::core::TriHit<float> fused{}, unfused{};
+      const bool a =
+          volley::core::intersect_moller<float, true>(r, s.vertex(t, 0), s.vertex(t, 1), s.vertex(t, 2), fused);
+      const bool b =
+          volley::core::intersect_moller<float, false>(r, s.vertex(t, 0), s.vertex(t, 1), s.vertex(t, 2), unfused);
+      if (!(a && b)) continue;
+      ++hits;
+      differ += ulps(fused.t, unfused.t) != 0 || ulps(fused.u, unfused.u) != 0 || ulps(fused.v, unfused.v) != 0;
+    }
+  }
+  MESSAGE("moller fused vs unfused: t, u or v differ in " << differ << " of " << hits << " hits");
+  CHECK(hits > 1000);
+  CHECK(differ > hits / 10);
+}
