@@ -31,8 +31,8 @@ static_assert(sizeof(BvhNode) == 32, "BvhNode is 32 bytes (two per cache line)")
 /// exactly once, grouped by leaf. Immutable after build: any number of threads may
 /// traverse it concurrently.
 struct Bvh {
-  std::vector<BvhNode> nodes;              // 32 bytes per node, 2n-1 nodes at most
-  std::vector<std::uint32_t> prim_index;   //  4 bytes per primitive
+  std::vector<BvhNode> nodes;             // 32 bytes per node, 2n-1 nodes at most
+  std::vector<std::uint32_t> prim_index;  //  4 bytes per primitive
 };
 
 /// Parameters of the binned SAH build (Wald 2007). Costs are relative: the SAH cost of
@@ -43,6 +43,11 @@ struct BvhBuildOptions {
   int min_leaf_size = 1;           ///< a node with this many or fewer is never split, in [1, max_leaf_size]
   float traversal_cost = 1.0f;     ///< cost of visiting one interior node, > 0
   float intersection_cost = 1.0f;  ///< cost of one primitive test, > 0
+  /// Primitives are stored in blocks of this many (the wide BVH's triangle blocks), in [1, 64].
+  /// The SAH prices a leaf of N primitives as N tests plus padding_cost per empty slot of its
+  /// last block (ceil(N / w) * w - N), so that leaves fill their blocks.
+  int leaf_block_width = 1;
+  float padding_cost = 1.0f;  ///< cost of an empty block slot, in primitive tests, in [0, 1]
 };
 
 /// Builds a binary BVH over the given primitive boxes with the binned SAH of Wald,
@@ -50,14 +55,16 @@ struct BvhBuildOptions {
 /// binned on all three axes, best plane by SAH, a leaf when the SAH says splitting does
 /// not pay and the node holds at most max_leaf_size primitives. Above max_leaf_size a
 /// split is forced; when the centroids coincide (or binning finds no plane) the node is
-/// split at the object median. Single-threaded; reentrant; O(n log n).
+/// split at the object median. Reentrant; O(n log n). Parallel on oneTBB (big nodes binned in
+/// parallel, subtrees built as tasks); the result is the same for any number of threads.
 ///
 /// Robustness: a primitive whose box is empty (lo > hi, a NaN bound) or has a
 /// non-finite bound is kept in a separate subtree under the root, split by index into
 /// leaves of at most max_leaf_size; it never influences the SAH of the valid ones, and
 /// with an empty box it is never visited by traversal. The depth is bounded by
 /// kBvhMaxDepth whatever the input (near the bound the builder switches to median
-/// splits), and nothing recurses, so no input can overflow a stack.
+/// splits); only the top levels (nodes of thousands of primitives) recurse, at most
+/// kBvhMaxDepth deep, so no input can overflow a stack.
 ///
 /// Throws std::invalid_argument for options outside the ranges above and
 /// std::length_error for more than 2^32 - 1 primitives.

@@ -4,12 +4,24 @@
 // intrinsics, part of the x86-64-v2 baseline every volley object is compiled for:
 // a box is two 4-lane registers (x, y, z and an unused 4th lane), extended with one
 // minps and one maxps. Everything else is plain scalar code.
+//
+// Parallel build (oneTBB): a node of at least kTaskNode primitives is split by the
+// top-level recursion, which builds its two children as parallel tasks (and bins the
+// biggest nodes in parallel chunks, merged in a fixed order); a smaller node is built by
+// a sequential SubtreeBuilder into a node array of its own, and the arrays are spliced
+// into one depth-first layout at the end. Which path a node takes depends only on its
+// primitive count, never on the number of threads, so the tree is the same for any.
 #include <immintrin.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +32,14 @@ namespace volley::core {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Nodes with at least this many primitives become parallel tasks; below it a subtree is
+// built sequentially (big enough that a task's overhead is noise, small enough that a
+// megatriangle scene makes hundreds of tasks).
+constexpr std::uint32_t kTaskNode = 1u << 12;
+// Nodes with at least this many primitives are binned in parallel chunks of kBinChunk.
+constexpr std::uint32_t kParallelBinning = 1u << 15;
+constexpr std::size_t kBinChunk = 1u << 13;
 
 // A primitive as the builder moves it around: its bounds and its id. The builder
 // partitions an array of these in place, so each pass reads memory sequentially
@@ -75,8 +95,8 @@ struct alignas(16) Box4 {
   }
 };
 
-// A node still to be processed: its items are items[begin, end), its box is already
-// stored in nodes[node], cbox bounds the items' centroids.
+// A node still to be processed: its items are items[begin, end), cbox bounds their
+// centroids; `node` is its index in the node array of whoever builds it.
 struct Task {
   std::uint32_t node;
   std::uint32_t begin;
@@ -84,6 +104,13 @@ struct Task {
   std::uint32_t depth;
   BBox cbox;
   bool spatial;  // false for the subtree of invalid primitives: split by index only
+};
+
+// How a node is split: items [begin, mid) go left, [mid, end) right.
+struct Split {
+  std::uint32_t mid;
+  BBox lbox, rbox;    // children's bounds
+  BBox lcbox, rcbox;  // children's centroid bounds
 };
 
 // ceil(log2(n)) for n >= 1.
@@ -94,247 +121,172 @@ int ceil_log2(std::uint32_t n) {
 }
 
 void check_options(const BvhBuildOptions& o) {
-  auto fail = [](const std::string& what) {
-    throw std::invalid_argument("build_bvh: " + what);
-  };
+  auto fail = [](const std::string& what) { throw std::invalid_argument("build_bvh: " + what); };
   if (o.bins < 2 || o.bins > 256) fail("bins must be in [2, 256], got " + std::to_string(o.bins));
   if (o.max_leaf_size < 1) fail("max_leaf_size must be >= 1");
-  if (o.min_leaf_size < 1 || o.min_leaf_size > o.max_leaf_size)
-    fail("min_leaf_size must be in [1, max_leaf_size]");
+  if (o.min_leaf_size < 1 || o.min_leaf_size > o.max_leaf_size) fail("min_leaf_size must be in [1, max_leaf_size]");
   if (!(o.traversal_cost > 0.0f) || !(o.intersection_cost > 0.0f))
     fail("traversal_cost and intersection_cost must be > 0");
+  if (o.leaf_block_width < 1 || o.leaf_block_width > 64)
+    fail("leaf_block_width must be in [1, 64], got " + std::to_string(o.leaf_block_width));
+  if (!(o.padding_cost >= 0.0f && o.padding_cost <= 1.0f)) fail("padding_cost must be in [0, 1]");
 }
 
-class Builder {
- public:
-  Builder(std::span<const BBox> boxes, const BvhBuildOptions& options)
-      : opt_(options), nbins_(options.bins) {
-    const std::size_t n = boxes.size();
-    items_.resize(n);
-    bins_.resize(3 * static_cast<std::size_t>(nbins_));
-    bin_count_.resize(3 * static_cast<std::size_t>(nbins_));
-    left_area_.resize(nbins_);
-    left_count_.resize(nbins_);
-    bvh_.nodes.reserve(2 * n - 1);
-    bvh_.prim_index.resize(n);
+// How a node's centroids map to bins: nb bins per axis from cbox.lo with scale
+// nb / extent on an active axis (finite extent > 0 and finite scale; a subnormal extent
+// would give scale = inf and NaN bins); an inactive axis gets scale 0, so all its
+// primitives land in bin 0, unused.
+struct BinGrid {
+  int nb = 0;
+  float scale[3] = {0, 0, 0};
+  bool active[3] = {false, false, false};
+  glm::vec3 cmin{0.0f};
 
-    // Valid primitives (non-empty box, finite centroid, hence finite bounds) go to
-    // the front in input order, the others to the back; both sets are bounded.
-    std::uint32_t front = 0;
-    std::uint32_t back = static_cast<std::uint32_t>(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const BBox& b = boxes[i];
-      const glm::vec3 c = b.center();
-      const bool valid =
-          !b.empty() && std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z);
-      const Item item{b.lo, 0.0f, b.hi, static_cast<std::uint32_t>(i)};
-      if (valid) {
-        items_[front++] = item;
-        valid_box_.extend(b);
-        valid_cbox_.extend(c);
-      } else {
-        items_[--back] = item;
-        invalid_box_.extend(b);
+  BinGrid(const BBox& cbox, int bins) : nb(bins), cmin(cbox.lo) {
+    for (int a = 0; a < 3; ++a) {
+      const float extent = cbox.hi[a] - cbox.lo[a];
+      const float s = static_cast<float>(nb) / extent;
+      active[a] = extent > 0.0f && std::isfinite(s) && s > 0.0f;
+      scale[a] = active[a] ? s : 0.0f;
+    }
+  }
+  bool any_active() const { return active[0] || active[1] || active[2]; }
+};
+
+// Bounds and primitive counts of the bins of the three axes (axis a: bins [a * cap, a * cap + nb)),
+// plus a second set of the same shape that add() fills with every other primitive: two
+// independent read-modify-write chains, where one chain stalls on store forwarding
+// whenever neighbouring primitives (neighbours in a mesh) fall into the same bin.
+struct Bins {
+  int cap = 0;
+  std::vector<Box4> box;             // 2 sets x 3 axes x cap
+  std::vector<std::uint32_t> count;  // 2 sets x 3 axes x cap
+
+  explicit Bins(int capacity) : cap(capacity), box(6 * std::size_t(capacity)), count(6 * std::size_t(capacity)) {}
+  void clear(int nb, int set = 0) {
+    for (int a = 3 * set; a < 3 * set + 3; ++a) {
+      std::fill_n(&box[a * cap], nb, Box4{});
+      std::fill_n(&count[a * cap], nb, 0u);
+    }
+  }
+  // Adds items [begin, end) on the three axes in one pass (Wald 2007, sec. 3), into set 0.
+  void add(const Item* items, std::uint32_t begin, std::uint32_t end, const BinGrid& g) {
+    // Below this many items clearing and folding the second set costs more than it saves.
+    constexpr std::uint32_t kTwoSets = 64;
+    if (end - begin < kTwoSets) return add_to(0, items, begin, end, 1, g);
+    clear(g.nb, 1);
+    add_to(0, items, begin, end, 2, g);
+    add_to(1, items, begin + 1, end, 2, g);
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < g.nb; ++b) {
+        box[a * cap + b].extend(box[(a + 3) * cap + b]);
+        count[a * cap + b] += count[(a + 3) * cap + b];
       }
     }
-    // The invalid ones were stored back to front; restore input order among them.
-    std::reverse(items_.begin() + back, items_.end());
-    n_valid_ = front;
   }
-
-  Bvh run() {
-    const std::uint32_t n = static_cast<std::uint32_t>(items_.size());
-    BBox root_box = valid_box_;
-    root_box.extend(invalid_box_);
-    bvh_.nodes.push_back({root_box, 0, 0});
-    if (n_valid_ == n || n_valid_ == 0) {
-      tasks_.push_back({0, 0, n, 0, valid_cbox_, n_valid_ == n});
-    } else {
-      // Root = (valid subtree, invalid subtree).
-      bvh_.nodes[0].first_or_child = 1;
-      bvh_.nodes.push_back({valid_box_, 0, 0});
-      bvh_.nodes.push_back({invalid_box_, 0, 0});
-      tasks_.push_back({2, n_valid_, n, 1, BBox{}, false});
-      tasks_.push_back({1, 0, n_valid_, 1, valid_cbox_, true});
+  void merge(const Bins& o, int nb) {
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < nb; ++b) {
+        box[a * cap + b].extend(o.box[a * cap + b]);
+        count[a * cap + b] += o.count[a * cap + b];
+      }
     }
-    // Depth first, iteratively: the task stack holds at most one pending sibling
-    // per level.
-    while (!tasks_.empty()) {
-      const Task task = tasks_.back();
-      tasks_.pop_back();
-      process(task);
-    }
-    for (std::uint32_t i = 0; i < n; ++i) bvh_.prim_index[i] = items_[i].prim;
-    return std::move(bvh_);
   }
 
  private:
-  // Bin index of centroid coordinate c on an active axis (finite extent > 0) of nb
-  // bins from cmin with scale nb / extent; clamped because c == cmax maps to nb.
-  // c >= cmin, so the index is not negative.
-  static int bin_of(float c, float cmin, float scale, int nb) {
-    const int b = static_cast<int>((c - cmin) * scale);
-    return b < nb - 1 ? b : nb - 1;
-  }
-
-  void make_leaf(const Task& t) {
-    bvh_.nodes[t.node].first_or_child = t.begin;
-    bvh_.nodes[t.node].count = t.end - t.begin;
-  }
-
-  // Allocates the child pair of t.node and queues both children.
-  void split(const Task& t, std::uint32_t mid, const BBox& lbox, const BBox& rbox,
-             const BBox& lcbox, const BBox& rcbox) {
-    const std::uint32_t child = static_cast<std::uint32_t>(bvh_.nodes.size());
-    bvh_.nodes[t.node].first_or_child = child;
-    bvh_.nodes[t.node].count = 0;
-    bvh_.nodes.push_back({lbox, 0, 0});
-    bvh_.nodes.push_back({rbox, 0, 0});
-    // Right first so that the left child is processed next (depth-first layout).
-    tasks_.push_back({child + 1, mid, t.end, t.depth + 1, rcbox, t.spatial});
-    tasks_.push_back({child, t.begin, mid, t.depth + 1, lcbox, t.spatial});
-  }
-
-  // Object-median split: along the largest centroid axis when the centroids are
-  // finite and spread, else (coincident centroids, invalid primitives) by position.
-  // Scalar code: the invalid primitives' bounds may be NaN or infinite.
-  void median_split(const Task& t) {
-    const std::uint32_t mid = t.begin + (t.end - t.begin) / 2;
-    if (t.spatial && !t.cbox.empty()) {
-      const int axis = t.cbox.largest_axis();
-      if (t.cbox.hi[axis] > t.cbox.lo[axis]) {
-        std::nth_element(items_.begin() + t.begin, items_.begin() + mid, items_.begin() + t.end,
-                         [axis](const Item& a, const Item& b) {
-                           return a.center(axis) < b.center(axis);
-                         });
-      }
+  // Adds items begin, begin + step, ... < end into `set`.
+  void add_to(int set, const Item* items, std::uint32_t begin, std::uint32_t end, std::uint32_t step,
+              const BinGrid& g) {
+    const __m128 cmin = load3(g.cmin);
+    const __m128 scale4 = _mm_setr_ps(g.scale[0], g.scale[1], g.scale[2], 0.0f);
+    const __m128i last = _mm_set1_epi32(g.nb - 1);
+    const __m128i first = _mm_setzero_si128();
+    Box4* bx = &box[3 * set * cap];
+    Box4* by = bx + cap;
+    Box4* bz = by + cap;
+    std::uint32_t* cx = &count[3 * set * cap];
+    std::uint32_t* cy = cx + cap;
+    std::uint32_t* cz = cy + cap;
+    for (std::uint32_t i = begin; i < end; i += step) {
+      const __m128 lo = load_lo(items[i]);
+      const __m128 hi = load_hi(items[i]);
+      // Clamped on both sides: on an inactive axis whose centroid extent overflowed,
+      // (c - cmin) * 0 is inf * 0 = NaN, which converts to INT_MIN.
+      const __m128i k = _mm_max_epi32(
+          _mm_min_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(center4(lo, hi), cmin), scale4)), last), first);
+      const int kx = _mm_cvtsi128_si32(k);
+      const int ky = _mm_extract_epi32(k, 1);
+      const int kz = _mm_extract_epi32(k, 2);
+      bx[kx].extend(lo, hi);
+      by[ky].extend(lo, hi);
+      bz[kz].extend(lo, hi);
+      ++cx[kx];
+      ++cy[ky];
+      ++cz[kz];
     }
-    BBox lbox, rbox, lcbox, rcbox;
-    for (std::uint32_t i = t.begin; i < t.end; ++i) {
-      const BBox b = items_[i].box();
-      (i < mid ? lbox : rbox).extend(b);
-      if (t.spatial) (i < mid ? lcbox : rcbox).extend(b.center());
-    }
-    split(t, mid, lbox, rbox, lcbox, rcbox);
   }
+};
 
-  // A node of two primitives: SAH leaf-or-split (as in process()) with the children
-  // being the two primitives themselves.
-  void split_pair(const Task& t) {
-    const BBox p = items_[t.begin].box();
-    const BBox q = items_[t.begin + 1].box();
-    if (2 <= opt_.max_leaf_size) {
-      const float area = bvh_.nodes[t.node].box.half_area();
-      const float ci = opt_.intersection_cost;
-      const float leaf = ci * 2.0f * area;
-      const float split_cost = opt_.traversal_cost * area + ci * (p.half_area() + q.half_area());
-      if (!(split_cost < leaf)) return make_leaf(t);
-    }
-    const glm::vec3 cp = p.center();
-    const glm::vec3 cq = q.center();
-    split(t, t.begin + 1, p, q, BBox{cp, cp}, BBox{cq, cq});
-  }
+// Decides how to split one node and partitions its items accordingly; the policy of
+// build_bvh (bvh.h). One per thread: it owns the bins.
+class Splitter {
+ public:
+  Splitter(const BvhBuildOptions& options, Item* items) : opt_(options), items_(items), bins_(options.bins) {}
 
-  void process(const Task& t) {
+  // Node t with bounds `box`: false for a leaf, else true with the split in `out` and
+  // the items partitioned. `parallel` bins in parallel chunks.
+  bool split(const Task& t, const BBox& box, bool parallel, Split& out) {
     const std::uint32_t count = t.end - t.begin;
     const std::uint32_t max_leaf = static_cast<std::uint32_t>(opt_.max_leaf_size);
-    if (count <= static_cast<std::uint32_t>(opt_.min_leaf_size)) return make_leaf(t);
+    if (count <= static_cast<std::uint32_t>(opt_.min_leaf_size)) return false;
 
     // Depth guard: median splits need ceil(log2(count)) more levels at most; take
     // them once the SAH could otherwise push a leaf to kBvhMaxDepth.
     const bool depth_guard = static_cast<int>(t.depth) + ceil_log2(count) + 1 >= kBvhMaxDepth;
     if (!t.spatial || depth_guard) {
-      if (count <= max_leaf) return make_leaf(t);
-      return median_split(t);
+      if (count <= max_leaf) return false;
+      return median_split(t, out);
     }
-
     // Two primitives: the only split is one per child, no binning needed.
-    if (count == 2) return split_pair(t);
+    if (count == 2) return split_pair(t, box, out);
 
-    // Binning setup per axis: an axis takes part when its centroid extent is > 0 and
-    // its scale finite (a subnormal extent would give scale = inf and NaN bins); an
-    // axis that does not gets scale 0, so its primitives all land in bin 0, unused.
-    // A node of count < bins primitives gets count bins: at most count of them can
-    // be occupied anyway, and clearing and sweeping 3 x bins bins per node would
-    // otherwise dominate the build for the many small nodes near the leaves.
-    const int nb = count < static_cast<std::uint32_t>(nbins_) ? static_cast<int>(count) : nbins_;
-    float scale[3];
-    bool active[3];
-    bool any_active = false;
-    for (int a = 0; a < 3; ++a) {
-      const float extent = t.cbox.hi[a] - t.cbox.lo[a];
-      const float s = static_cast<float>(nb) / extent;
-      active[a] = extent > 0.0f && std::isfinite(s) && s > 0.0f;
-      scale[a] = active[a] ? s : 0.0f;
-      any_active = any_active || active[a];
+    // A node of count < bins primitives gets count bins: at most count of them can be
+    // occupied anyway, and clearing and sweeping 3 x bins bins per node would otherwise
+    // dominate the build for the many small nodes near the leaves.
+    const int nb = count < static_cast<std::uint32_t>(opt_.bins) ? static_cast<int>(count) : opt_.bins;
+    const BinGrid grid(t.cbox, nb);
+    if (!grid.any_active()) {
+      if (count <= max_leaf) return false;
+      return median_split(t, out);
     }
-    if (!any_active) {
-      if (count <= max_leaf) return make_leaf(t);
-      return median_split(t);
-    }
-
-    // Bin primitive boxes by centroid on the three axes in one pass (Wald 2007, sec. 3).
-    for (int a = 0; a < 3; ++a) {
-      std::fill_n(&bins_[a * nbins_], nb, Box4{});
-      std::fill_n(&bin_count_[a * nbins_], nb, 0u);
-    }
-    {
-      const __m128 cmin = load3(t.cbox.lo);
-      const __m128 scale4 = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
-      const __m128i last = _mm_set1_epi32(nb - 1);
-      const __m128i first = _mm_setzero_si128();
-      Box4* bx = &bins_[0];
-      Box4* by = &bins_[nbins_];
-      Box4* bz = &bins_[2 * nbins_];
-      std::uint32_t* cx = &bin_count_[0];
-      std::uint32_t* cy = &bin_count_[nbins_];
-      std::uint32_t* cz = &bin_count_[2 * nbins_];
-      for (std::uint32_t i = t.begin; i < t.end; ++i) {
-        const __m128 lo = load_lo(items_[i]);
-        const __m128 hi = load_hi(items_[i]);
-        // Clamped on both sides: on an inactive axis whose centroid extent overflowed,
-        // (c - cmin) * 0 is inf * 0 = NaN, which converts to INT_MIN.
-        const __m128i k = _mm_max_epi32(
-            _mm_min_epi32(
-                _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(center4(lo, hi), cmin), scale4)), last),
-            first);
-        const int kx = _mm_cvtsi128_si32(k);
-        const int ky = _mm_extract_epi32(k, 1);
-        const int kz = _mm_extract_epi32(k, 2);
-        bx[kx].extend(lo, hi);
-        by[ky].extend(lo, hi);
-        bz[kz].extend(lo, hi);
-        ++cx[kx];
-        ++cy[ky];
-        ++cz[kz];
-      }
-    }
+    bin(t, grid, parallel);
 
     // Sweep the bins from both sides to find the cheapest plane: cost in units of
-    // intersection_cost * area, A_left N_left + A_right N_right.
+    // intersection_cost * area, A_left slots(N_left) + A_right slots(N_right).
     float best_cost = kInf;
     int best_axis = -1;
     int best_bin = -1;  // left side takes bins [0, best_bin]
+    float left_area[256];
+    std::uint32_t left_count[256];
     for (int a = 0; a < 3; ++a) {
-      if (!active[a]) continue;
-      const Box4* bins = &bins_[a * nbins_];
-      const std::uint32_t* counts = &bin_count_[a * nbins_];
+      if (!grid.active[a]) continue;
+      const Box4* bins = &bins_.box[a * bins_.cap];
+      const std::uint32_t* counts = &bins_.count[a * bins_.cap];
       Box4 acc;
       std::uint32_t n = 0;
       for (int b = 0; b < nb - 1; ++b) {
         acc.extend(bins[b]);
         n += counts[b];
-        left_area_[b] = acc.half_area();
-        left_count_[b] = n;
+        left_area[b] = acc.half_area();
+        left_count[b] = n;
       }
       acc = Box4{};
       n = 0;
       for (int b = nb - 1; b > 0; --b) {
         acc.extend(bins[b]);
         n += counts[b];
-        if (n == 0 || left_count_[b - 1] == 0) continue;
-        const float cost = left_area_[b - 1] * static_cast<float>(left_count_[b - 1]) +
-                           acc.half_area() * static_cast<float>(n);
+        if (n == 0 || left_count[b - 1] == 0) continue;
+        const float cost = left_area[b - 1] * slots(left_count[b - 1]) + acc.half_area() * slots(n);
         if (cost < best_cost) {
           best_cost = cost;
           best_axis = a;
@@ -345,31 +297,74 @@ class Builder {
 
     // Leaf or split (SAH normalised by this node's area A; compared multiplied by A so
     // that A = 0, a node flat to a segment or a point, is no division by zero):
-    // leaf cost  C_i N  vs  split cost  C_t + C_i (A_l N_l + A_r N_r) / A.
-    const float area = bvh_.nodes[t.node].box.half_area();
+    // leaf cost  C_i slots(N)  vs  split cost  C_t + C_i (A_l slots(N_l) + A_r slots(N_r)) / A.
+    const float area = box.half_area();
     const float ci = opt_.intersection_cost;
     if (count <= max_leaf) {
-      const float leaf = ci * static_cast<float>(count) * area;
+      const float leaf = ci * slots(count) * area;
       const float split_cost = opt_.traversal_cost * area + ci * best_cost;
-      if (best_axis < 0 || !(split_cost < leaf)) return make_leaf(t);
+      if (best_axis < 0 || !(split_cost < leaf)) return false;
     }
     // No plane separates the centroids (possible only when the areas overflow).
-    if (best_axis < 0) return median_split(t);
+    if (best_axis < 0) return median_split(t, out);
+    partition(t, grid, best_axis, best_bin, out);
+    return true;
+  }
 
-    // In-place partition by bin, branch-free (Lomuto with an unconditional swap: the
-    // side of a primitive is a coin toss to the branch predictor), bounding the
-    // children's centroids on the way: lanes of the other side are blended to the
-    // empty bound so that one min and one max per side serve both sides.
-    const int a = best_axis;
-    const float cmin = t.cbox.lo[a];
-    const float s = scale[a];
+ private:
+  // Test cost of n primitives in leaf blocks of leaf_block_width, in primitive tests: n plus
+  // padding_cost per empty slot of the last block (a shift for the usual power-of-two
+  // widths: the sweep asks twice per bin).
+  float slots(std::uint32_t n) const {
+    const std::uint32_t w = static_cast<std::uint32_t>(opt_.leaf_block_width);
+    const std::uint32_t padded =
+        block_shift_ >= 0 ? ((n + w - 1) >> block_shift_) << block_shift_ : (n + w - 1) / w * w;
+    return static_cast<float>(n) + opt_.padding_cost * static_cast<float>(padded - n);
+  }
+  static int shift_of(int w) {
+    for (int k = 0; k < 7; ++k)
+      if (w == 1 << k) return k;
+    return -1;
+  }
+
+  void bin(const Task& t, const BinGrid& grid, bool parallel) {
+    bins_.clear(grid.nb);
+    if (!parallel) return bins_.add(items_, t.begin, t.end, grid);
+    // Fixed chunks joined in a fixed order: the same bins for any number of threads.
+    Bins empty(opt_.bins);
+    empty.clear(grid.nb);
+    bins_ = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::uint32_t>(t.begin, t.end, kBinChunk), empty,
+        [&](const tbb::blocked_range<std::uint32_t>& r, Bins acc) {
+          acc.add(items_, r.begin(), r.end(), grid);
+          return acc;
+        },
+        [&](Bins a, const Bins& b) {
+          a.merge(b, grid.nb);
+          return a;
+        });
+  }
+
+  // In-place partition by bin, branch-free (Lomuto with an unconditional swap: the side
+  // of a primitive is a coin toss to the branch predictor), bounding the children's
+  // centroids on the way: lanes of the other side are blended to the empty bound so
+  // that one min and one max per side serve both sides.
+  void partition(const Task& t, const BinGrid& grid, int a, int best_bin, Split& out) {
     const __m128 pos_inf = _mm_set1_ps(kInf);
     const __m128 neg_inf = _mm_set1_ps(-kInf);
+    // The grid's fields as locals: the item stores below could alias them, which would
+    // make the compiler reload them for every item.
+    const float cmin = grid.cmin[a];
+    const float scale = grid.scale[a];
+    const int last_bin = grid.nb - 1;
     Box4 lc, rc;
     std::uint32_t mid = t.begin;
     for (std::uint32_t i = t.begin; i < t.end; ++i) {
       const Item item = items_[i];
-      const bool left = bin_of(item.center(a), cmin, s, nb) <= best_bin;
+      // Its bin as binning computed it; clamped because c == cmax maps to nb (c >= cmin, so
+      // the index is not negative on the active axis a).
+      const int b = static_cast<int>((item.center(a) - cmin) * scale);
+      const bool left = (b < last_bin ? b : last_bin) <= best_bin;
       items_[i] = items_[mid];
       items_[mid] = item;
       mid += left ? 1u : 0u;
@@ -382,24 +377,232 @@ class Builder {
     Box4 lbox, rbox;
     std::uint32_t left_count = 0;
     for (int b = 0; b <= best_bin; ++b) {
-      lbox.extend(bins_[a * nbins_ + b]);
-      left_count += bin_count_[a * nbins_ + b];
+      lbox.extend(bins_.box[a * bins_.cap + b]);
+      left_count += bins_.count[a * bins_.cap + b];
     }
-    for (int b = best_bin + 1; b < nb; ++b) rbox.extend(bins_[a * nbins_ + b]);
+    for (int b = best_bin + 1; b < grid.nb; ++b) rbox.extend(bins_.box[a * bins_.cap + b]);
     assert(mid - t.begin == left_count && "partition disagrees with the bins");
     (void)left_count;
-    split(t, mid, lbox.to_bbox(), rbox.to_bbox(), lc.to_bbox(), rc.to_bbox());
+    out = {mid, lbox.to_bbox(), rbox.to_bbox(), lc.to_bbox(), rc.to_bbox()};
   }
 
-  BvhBuildOptions opt_;
-  int nbins_;
-  Bvh bvh_;
-  std::vector<Item> items_;
-  std::vector<Box4> bins_;              // 3 axes x nbins_: bounds of the primitives binned
-  std::vector<std::uint32_t> bin_count_;  // 3 axes x nbins_: primitives per bin
-  std::vector<float> left_area_;        // sweep: area of bins [0, b]
-  std::vector<std::uint32_t> left_count_;  // sweep: primitives in bins [0, b]
+  // Object-median split: along the largest centroid axis when the centroids are
+  // finite and spread, else (coincident centroids, invalid primitives) by position.
+  // Scalar code: the invalid primitives' bounds may be NaN or infinite.
+  bool median_split(const Task& t, Split& out) {
+    const std::uint32_t mid = t.begin + (t.end - t.begin) / 2;
+    if (t.spatial && !t.cbox.empty()) {
+      const int axis = t.cbox.largest_axis();
+      if (t.cbox.hi[axis] > t.cbox.lo[axis]) {
+        std::nth_element(items_ + t.begin, items_ + mid, items_ + t.end,
+                         [axis](const Item& a, const Item& b) { return a.center(axis) < b.center(axis); });
+      }
+    }
+    out = Split{mid, {}, {}, {}, {}};
+    for (std::uint32_t i = t.begin; i < t.end; ++i) {
+      const BBox b = items_[i].box();
+      (i < mid ? out.lbox : out.rbox).extend(b);
+      if (t.spatial) (i < mid ? out.lcbox : out.rcbox).extend(b.center());
+    }
+    return true;
+  }
+
+  // A node of two primitives: SAH leaf-or-split (as in split()) with the children
+  // being the two primitives themselves.
+  bool split_pair(const Task& t, const BBox& box, Split& out) {
+    const BBox p = items_[t.begin].box();
+    const BBox q = items_[t.begin + 1].box();
+    if (2 <= opt_.max_leaf_size) {
+      const float area = box.half_area();
+      const float ci = opt_.intersection_cost;
+      const float leaf = ci * slots(2) * area;
+      const float split_cost = opt_.traversal_cost * area + ci * slots(1) * (p.half_area() + q.half_area());
+      if (!(split_cost < leaf)) return false;
+    }
+    const glm::vec3 cp = p.center();
+    const glm::vec3 cq = q.center();
+    out = {t.begin + 1, p, q, BBox{cp, cp}, BBox{cq, cq}};
+    return true;
+  }
+
+  const BvhBuildOptions& opt_;
+  Item* items_;
+  Bins bins_;
+  int block_shift_ = shift_of(opt_.leaf_block_width);  // log2(leaf_block_width), -1 if not a power of two
+};
+
+// Builds the subtree of one task depth first into its own node array: nodes[0] is the
+// task's node, child indices are local, leaves index the shared item array.
+class SubtreeBuilder {
+ public:
+  SubtreeBuilder(const BvhBuildOptions& options, Item* items) : splitter_(options, items) {}
+
+  std::vector<BvhNode> build(Task root, const BBox& box) {
+    nodes_.reserve(2 * std::size_t{root.end - root.begin} - 1);
+    nodes_.push_back({box, 0, 0});
+    root.node = 0;
+    // Iteratively: the task stack holds at most one pending sibling per level.
+    tasks_.push_back(root);
+    while (!tasks_.empty()) {
+      const Task t = tasks_.back();
+      tasks_.pop_back();
+      Split s;
+      if (!splitter_.split(t, nodes_[t.node].box, false, s)) {
+        nodes_[t.node].first_or_child = t.begin;
+        nodes_[t.node].count = t.end - t.begin;
+        continue;
+      }
+      const std::uint32_t child = static_cast<std::uint32_t>(nodes_.size());
+      nodes_[t.node].first_or_child = child;
+      nodes_[t.node].count = 0;
+      nodes_.push_back({s.lbox, 0, 0});
+      nodes_.push_back({s.rbox, 0, 0});
+      // Right first so that the left child is processed next (depth-first layout).
+      tasks_.push_back({child + 1, s.mid, t.end, t.depth + 1, s.rcbox, t.spatial});
+      tasks_.push_back({child, t.begin, s.mid, t.depth + 1, s.lcbox, t.spatial});
+    }
+    return std::move(nodes_);
+  }
+
+ private:
+  Splitter splitter_;
+  std::vector<BvhNode> nodes_;
   std::vector<Task> tasks_;
+};
+
+// A node of the parallel top levels: either split (left and right set) or the root of
+// a subtree built sequentially (`subtree`, root first, local child indices).
+struct TopNode {
+  BBox box;
+  std::unique_ptr<TopNode> left, right;
+  std::vector<BvhNode> subtree;
+};
+
+class Builder {
+ public:
+  Builder(std::span<const BBox> boxes, const BvhBuildOptions& options)
+      : opt_(options), n_(static_cast<std::uint32_t>(boxes.size())), items_(new Item[boxes.size()]) {
+    // Valid primitives (non-empty box, finite centroid, hence finite bounds) go to
+    // the front in input order, the others to the back; both sets are bounded.
+    std::uint32_t front = 0;
+    std::uint32_t back = n_;
+    for (std::uint32_t i = 0; i < n_; ++i) {
+      const BBox& b = boxes[i];
+      const glm::vec3 c = b.center();
+      const bool valid = !b.empty() && std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z);
+      const Item item{b.lo, 0.0f, b.hi, i};
+      if (valid) {
+        items_[front++] = item;
+        valid_box_.extend(b);
+        valid_cbox_.extend(c);
+      } else {
+        items_[--back] = item;
+        invalid_box_.extend(b);
+      }
+    }
+    // The invalid ones were stored back to front; restore input order among them.
+    std::reverse(items_.get() + back, items_.get() + n_);
+    n_valid_ = front;
+  }
+
+  Bvh run() {
+    TopNode root;
+    root.box = valid_box_;
+    root.box.extend(invalid_box_);
+    if (n_valid_ == n_ || n_valid_ == 0) {
+      build_top(root, {0, 0, n_, 0, valid_cbox_, n_valid_ == n_});
+    } else {
+      // Root = (valid subtree, invalid subtree).
+      root.left = std::make_unique<TopNode>();
+      root.right = std::make_unique<TopNode>();
+      root.left->box = valid_box_;
+      root.right->box = invalid_box_;
+      tbb::parallel_invoke(
+          [&] {
+            build_top(*root.left, {0, 0, n_valid_, 1, valid_cbox_, true});
+          },
+          [&] {
+            build_top(*root.right, {0, n_valid_, n_, 1, BBox{}, false});
+          });
+    }
+
+    Bvh bvh;
+    bvh.nodes.reserve(2 * std::size_t{n_} - 1);
+    bvh.nodes.push_back({});
+    std::vector<Splice> splices;
+    place(root, 0, bvh.nodes, splices);
+    tbb::parallel_for(std::size_t{0}, splices.size(), [&](std::size_t k) { splice(splices[k], bvh.nodes); });
+    bvh.prim_index.resize(n_);
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n_, 1u << 14), [&](const auto& r) {
+      for (std::uint32_t i = r.begin(); i < r.end(); ++i) bvh.prim_index[i] = items_[i].prim;
+    });
+    return bvh;
+  }
+
+ private:
+  // A sequentially built subtree's place in the final array: its root at `root`, its
+  // other nodes (local index j >= 1) at base + j - 1.
+  struct Splice {
+    const std::vector<BvhNode>* nodes;
+    std::uint32_t root;
+    std::uint32_t base;
+  };
+
+  // Recursion depth <= tree depth < kBvhMaxDepth.
+  void build_top(TopNode& node, const Task& t) {
+    const std::uint32_t count = t.end - t.begin;
+    if (count < kTaskNode || !t.spatial) {
+      node.subtree = SubtreeBuilder(opt_, items_.get()).build(t, node.box);
+      return;
+    }
+    Split s;
+    if (!Splitter(opt_, items_.get()).split(t, node.box, count >= kParallelBinning, s)) {
+      node.subtree = {BvhNode{node.box, t.begin, count}};
+      return;
+    }
+    node.left = std::make_unique<TopNode>();
+    node.right = std::make_unique<TopNode>();
+    node.left->box = s.lbox;
+    node.right->box = s.rbox;
+    tbb::parallel_invoke(
+        [&] {
+          build_top(*node.left, {0, t.begin, s.mid, t.depth + 1, s.lcbox, t.spatial});
+        },
+        [&] {
+          build_top(*node.right, {0, s.mid, t.end, t.depth + 1, s.rcbox, t.spatial});
+        });
+  }
+
+  // Lays out the top levels depth first as SubtreeBuilder would (a node's children as a
+  // pair, then the left subtree, then the right) and reserves room for each subtree.
+  static void place(const TopNode& node, std::uint32_t index, std::vector<BvhNode>& out, std::vector<Splice>& splices) {
+    if (node.left) {
+      const std::uint32_t child = static_cast<std::uint32_t>(out.size());
+      out[index] = {node.box, child, 0};
+      out.push_back({node.left->box, 0, 0});
+      out.push_back({node.right->box, 0, 0});
+      place(*node.left, child, out, splices);
+      place(*node.right, child + 1, out, splices);
+      return;
+    }
+    const std::uint32_t base = static_cast<std::uint32_t>(out.size());
+    out.resize(out.size() + node.subtree.size() - 1);
+    splices.push_back({&node.subtree, index, base});
+  }
+
+  static void splice(const Splice& s, std::vector<BvhNode>& out) {
+    const std::vector<BvhNode>& sub = *s.nodes;
+    auto to_global = [&](std::uint32_t j) { return j == 0 ? s.root : s.base + j - 1; };
+    for (std::uint32_t j = 0; j < sub.size(); ++j) {
+      BvhNode node = sub[j];
+      if (!node.is_leaf()) node.first_or_child = to_global(node.first_or_child);
+      out[to_global(j)] = node;
+    }
+  }
+
+  const BvhBuildOptions opt_;
+  const std::uint32_t n_;
+  std::unique_ptr<Item[]> items_;  // default-initialised: every slot is written above
   std::uint32_t n_valid_ = 0;
   BBox valid_box_, valid_cbox_, invalid_box_;
 };
@@ -413,7 +616,6 @@ Bvh build_bvh(std::span<const BBox> prim_boxes, const BvhBuildOptions& options) 
   if (prim_boxes.empty()) return Bvh{};
   return Builder(prim_boxes, options).run();
 }
-
 BvhStats bvh_stats(const Bvh& bvh, const BvhBuildOptions& options) {
   BvhStats s;
   s.nodes = bvh.nodes.size();
@@ -441,9 +643,8 @@ BvhStats bvh_stats(const Bvh& bvh, const BvhBuildOptions& options) {
     }
   }
   const double root_area = bvh.nodes[0].box.half_area();
-  s.sah_cost = root_area > 0.0 && std::isfinite(root_area)
-                   ? cost / root_area
-                   : std::numeric_limits<double>::quiet_NaN();
+  s.sah_cost =
+      root_area > 0.0 && std::isfinite(root_area) ? cost / root_area : std::numeric_limits<double>::quiet_NaN();
   s.mean_leaf_size = static_cast<double>(prims) / static_cast<double>(s.leaves);
   return s;
 }
