@@ -81,7 +81,22 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
   };
 
   if (bvh.nodes[0].is_leaf()) {
-    root = leaf_ref(0, 0);
+    // A lone leaf still has its box tested, in a node of one child, as the oracle's binary
+    // BVH tests its root box: both Accels then cull the same rays (an ill-conditioned
+    // Moller "hit" far outside the triangle's box is dropped by both).
+    root = 0;
+    simd::WideNode<N> node = inert_node();
+    const core::BvhNode& leaf = bvh.nodes[0];
+    if (!leaf.box.empty()) {
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[2 * a][0] = leaf.box.lo[a];
+        node.bounds[2 * a + 1][0] = leaf.box.hi[a];
+      }
+      node.child[0] = leaf_ref(0, 1);
+      children = 1;
+    }
+    node_area = leaf.box.half_area();
+    nodes.push_back(node);
   } else {
     root = 0;
     nodes.push_back(inert_node());
