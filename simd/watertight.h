@@ -22,6 +22,10 @@
 
 namespace volley::simd::detail {
 
+/// Relative widening of the scaled range prefilter: core::kScaledPad<float> (the oracle's;
+/// not included here, per-ISA files must not include src/core; tests/simd asserts equality).
+inline constexpr float kScaledPad = 2 * std::numeric_limits<float>::epsilon();
+
 /// Watertight test on kLanes<Arch> (ray, triangle) pairs. Reads WatertightBlock<kLanes<Arch>>.
 /// Zero-area triangles are made NaN lanes when the block is built (the oracle's first
 /// check), so the kernel never sees one.
@@ -236,11 +240,14 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   valid = valid & finite_nonzero<Arch>(det);
   const B ad = xsimd::abs(det);
   if (xsimd::none(valid)) return {valid, det, det, det, det, ad};
-  // Scaled distance t det against [tmin, upper) |det| with det's sign folded in.
+  // Scaled distance t det against [tmin, upper) |det| with det's sign folded in: the
+  // oracle's prefilter, widened by kScaledPad so that only the quotient decides.
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;
   const B ts = eu * az + ev * bz + ew * cz;
   const B ts_s = ts ^ (det & B(-0.0f));
-  valid = valid & (ts_s >= r.tmin * ad) & (ts_s < upper * ad);
+  const B pad(kScaledPad);
+  const B lo = r.tmin * ad, hi = upper * ad;
+  valid = valid & (ts_s >= lo - xsimd::abs(lo) * pad) & (ts_s < hi + xsimd::abs(hi) * pad);
   if (xsimd::none(valid)) return {valid, det, det, det, ts_s, ad};
   // Normalize the survivors and recheck the range on the quotient (as the oracle does).
   const B t = ts / det;
@@ -250,7 +257,8 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
 
 template <class Arch>
 auto WatertightTest<Arch>::accept(const Cand& c, B upper) -> M {
-  return c.valid & (c.ts_s < upper * c.ad) & (c.t < upper);
+  const B hi = upper * c.ad;
+  return c.valid & (c.ts_s < hi + xsimd::abs(hi) * B(kScaledPad)) & (c.t < upper);
 }
 
 template <class Arch>

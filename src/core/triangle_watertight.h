@@ -11,6 +11,10 @@
 
 namespace volley::core {
 
+/// Relative widening of the watertight test's scaled range prefilter (see below).
+template <class T>
+inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
+
 /// Per-ray constants of the watertight test: an axis permutation and a shear that map the
 /// ray onto the unit +z axis from the origin. 24 bytes for float.
 template <class T>
@@ -100,18 +104,23 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
   const T det = eu + ev + ew;
   if (!(std::abs(det) > 0 && std::abs(det) <= std::numeric_limits<T>::max())) return false;
 
-  // Scaled hit distance t * det, tested against [tmin, tmax) * det with det's sign folded
-  // in, so rejected candidates need no division (paper, section 3.5). False for NaN.
+  // Scaled hit distance t * det, tested against [tmin, tmax) * |det| with det's sign folded
+  // in, so most rejected candidates need no division (paper, section 3.5). False for NaN.
+  // A prefilter only: its bounds are widened by kScaledPad (2 eps, more than the rounding
+  // of tmax * |det| and of the widening itself), so it never rejects a t that the quotient
+  // test below accepts. Unwidened, it rejected triangles 1 ulp nearer than the current hit
+  // (rays aimed at shared vertices), and the closest hit depended on the visiting order.
   const T az = w.sz * a[w.kz];
   const T bz = w.sz * b[w.kz];
   const T cz = w.sz * c[w.kz];
   const T t_scaled = eu * az + ev * bz + ew * cz;
   const T sign = det < 0 ? T(-1) : T(1);
-  if (!(t_scaled * sign >= ray.tmin * (det * sign) && t_scaled * sign < ray.tmax * (det * sign)))
-    return false;
+  const T ad = det * sign;
+  const T lo = ray.tmin * ad, hi = ray.tmax * ad;
+  const T ts = t_scaled * sign;
+  if (!(ts >= lo - std::abs(lo) * kScaledPad<T> && ts < hi + std::abs(hi) * kScaledPad<T>)) return false;
 
-  // Normalize. The scaled test above can round differently from the quotient; recheck so the
-  // reported t honours tmin <= t < tmax exactly.
+  // Normalize and decide on the quotient: tmin <= t < tmax exactly.
   const T t = t_scaled / det;
   if (!(ray.tmin <= t && t < ray.tmax)) return false;
   hit = {t, ev / det, ew / det};

@@ -4,6 +4,12 @@
 // from the origin; axis-aligned rays on an integer heightfield (the double fallback).
 #include "simd_test_util.h"
 
+#include "core/triangle_watertight.h"
+#include "simd/watertight.h"
+
+// The kernels' prefilter widening is the oracle's (they may not include src/core).
+static_assert(volley::simd::detail::kScaledPad == volley::core::kScaledPad<float>);
+
 namespace {
 
 using namespace simd_test;
