@@ -88,6 +88,35 @@ void fail_not_committed(const volley_scene* scene) {
   fail(VOLLEY_ERROR_NOT_COMMITTED, "the scene changed (or was never committed): call volley_scene_commit first");
 }
 
+namespace {
+
+// Both commit functions: the options checked and applied, errors named after `function`.
+volley_status commit(volley_scene* scene, const volley_commit_options* in, const char* function) {
+  return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
+    require_pointer(scene, "scene");
+    require_pointer(in, "options");
+    volley::Options options;
+    options.test = to_test(in->test);
+    options.isa = to_isa(in->isa);
+    options.robust = in->robust != 0;
+    options.reference_double = in->reference_double != 0;
+    if (options.reference_double && (options.isa != volley::Isa::scalar || !options.robust))
+      fail(VOLLEY_ERROR_INVALID_ARGUMENT, "reference_double needs VOLLEY_ISA_SCALAR and robust box tests");
+    try {
+      // The ISA commit would run (VOLLEY_ISA applied for auto), resolved here so that an
+      // unsupported one gets its own status.
+      options.isa = volley::simd::resolve_isa(options.isa);
+    } catch (const std::invalid_argument& e) {
+      fail(VOLLEY_ERROR_UNSUPPORTED_ISA, e.what());
+    }
+    scene->committed = false;
+    scene->accel.commit(options);
+    scene->committed = true;
+  });
+}
+
+}  // namespace
+
 }  // namespace volley::capi
 
 using namespace volley::capi;
@@ -156,23 +185,24 @@ volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, si
   });
 }
 
+void volley_commit_options_default(volley_commit_options* options) {
+  if (options == nullptr) return;
+  options->test = VOLLEY_TEST_WATERTIGHT;
+  options->isa = VOLLEY_ISA_AUTO;
+  options->robust = 1;
+  options->reference_double = 0;
+}
+
 volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa) {
-  return guarded("volley_scene_commit", VOLLEY_ERROR_INTERNAL, [&] {
-    require_pointer(scene, "scene");
-    volley::Options options;
-    options.test = to_test(test);
-    options.isa = to_isa(isa);
-    try {
-      // The ISA commit would run (VOLLEY_ISA applied for auto), resolved here so that an
-      // unsupported one gets its own status.
-      options.isa = volley::simd::resolve_isa(options.isa);
-    } catch (const std::invalid_argument& e) {
-      fail(VOLLEY_ERROR_UNSUPPORTED_ISA, e.what());
-    }
-    scene->committed = false;
-    scene->accel.commit(options);
-    scene->committed = true;
-  });
+  volley_commit_options options;
+  volley_commit_options_default(&options);
+  options.test = test;
+  options.isa = isa;
+  return commit(scene, &options, "volley_scene_commit");
+}
+
+volley_status volley_scene_commit_ex(volley_scene* scene, const volley_commit_options* options) {
+  return commit(scene, options, "volley_scene_commit_ex");
 }
 
 volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info* info) {

@@ -234,6 +234,26 @@ VOLLEY_API volley_status volley_scene_add_polygon(volley_scene* scene, const flo
  *  then unchanged (and still committed if it was). */
 VOLLEY_API volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa);
 
+/** Everything volley_scene_commit_ex can set (volley::Options). Fill it with
+ *  volley_commit_options_default first, then change what you need: fields may be added at
+ *  the end in later versions, and the default function fills them all. */
+typedef struct volley_commit_options {
+  volley_triangle_test test; /**< default VOLLEY_TEST_WATERTIGHT */
+  volley_isa isa;            /**< default VOLLEY_ISA_AUTO */
+  int robust;                /**< nonzero (default): box tests padded against rounding, so the watertight
+                                  test stays watertight through the whole BVH; 0: plain box tests (faster) */
+  int reference_double;      /**< nonzero: the scalar oracle with triangle tests in double precision (the
+                                  accuracy reference); needs VOLLEY_ISA_SCALAR and robust; default 0 */
+} volley_commit_options;
+
+/** The defaults of volley_commit_options (those of volley_scene_commit). NULL is ignored. */
+VOLLEY_API void volley_commit_options_default(volley_commit_options* options);
+
+/** volley_scene_commit with every option. Errors as volley_scene_commit, and
+ *  VOLLEY_ERROR_INVALID_ARGUMENT for a NULL options or reference_double with another ISA
+ *  than VOLLEY_ISA_SCALAR or with robust = 0. */
+VOLLEY_API volley_status volley_scene_commit_ex(volley_scene* scene, const volley_commit_options* options);
+
 /** Facts about the committed scene, stored in *info.
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL argument), VOLLEY_ERROR_NOT_COMMITTED. */
 VOLLEY_API volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info* info);

@@ -144,7 +144,9 @@ static void check_misses(const volley_scene* scene) {
   }
 }
 
-static void check_scene(volley_triangle_test test, volley_isa isa) {
+static void check_scene(const volley_commit_options* options) {
+  const volley_triangle_test test = options->test;
+  const volley_isa isa = options->isa;
   volley_scene* scene;
   volley_scene_info info;
   volley_ray rays[SCENE_RAYS];
@@ -156,7 +158,7 @@ static void check_scene(volley_triangle_test test, volley_isa isa) {
     return;
   }
   scene = make_scene();
-  expect(volley_scene_commit(scene, test, isa), VOLLEY_OK, "volley_scene_commit");
+  expect(volley_scene_commit_ex(scene, options), VOLLEY_OK, "volley_scene_commit_ex");
   expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
   check(info.triangles == 4 && info.polygons == 1 && info.test == test, "info", 0);
   check(isa == VOLLEY_ISA_AUTO ? info.isa != VOLLEY_ISA_AUTO : info.isa == isa, "info.isa", (int)info.isa);
@@ -194,6 +196,7 @@ static void check_validation(void) {
   volley_scene* scene = NULL;
   volley_scene_info info;
   volley_hit hit;
+  volley_commit_options options;
   int occluded = 7;
   uint32_t first = 0, mask = 0;
   size_t bad = 0;
@@ -248,6 +251,12 @@ static void check_validation(void) {
   if (!volley_isa_supported(VOLLEY_ISA_AVX512))
     expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AVX512), VOLLEY_ERROR_UNSUPPORTED_ISA,
            "volley_scene_commit");
+  expect(volley_scene_commit_ex(scene, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
+  volley_commit_options_default(&options);
+  options.reference_double = 1; /* the double reference runs on the scalar oracle only */
+  expect(volley_scene_commit_ex(scene, &options), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
+  options.isa = VOLLEY_ISA_SCALAR, options.robust = 0;
+  expect(volley_scene_commit_ex(scene, &options), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
   expect(volley_scene_get_info(scene, &info), VOLLEY_ERROR_NOT_COMMITTED, "volley_scene_get_info");
   expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
   expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
@@ -323,8 +332,21 @@ int main(void) {
                                     VOLLEY_ISA_AVX512};
   static const volley_triangle_test tests[] = {VOLLEY_TEST_WATERTIGHT, VOLLEY_TEST_PLANE, VOLLEY_TEST_MOLLER};
   size_t t, i;
+  int robust;
+  volley_commit_options options;
   for (t = 0; t < 3; ++t)
-    for (i = 0; i < 5; ++i) check_scene(tests[t], isas[i]);
+    for (i = 0; i < 5; ++i)
+      for (robust = 1; robust >= 0; --robust) {
+        volley_commit_options_default(&options);
+        options.test = tests[t], options.isa = isas[i], options.robust = robust;
+        check_scene(&options);
+      }
+  /* The double-precision reference (scalar oracle). */
+  for (t = 0; t < 3; ++t) {
+    volley_commit_options_default(&options);
+    options.test = tests[t], options.isa = VOLLEY_ISA_SCALAR, options.reference_double = 1;
+    check_scene(&options);
+  }
   check_validation();
   if (failures) {
     printf("consumer_c: %d failures\n", failures);
