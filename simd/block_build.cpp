@@ -37,10 +37,10 @@ void fill_lane(MollerBlock<W>& b, int i, const V3& p0, const V3& p1, const V3& p
 template <int W>
 void fill_lane(PlaneBlock<W>& b, int i, const V3& p0, const V3& p1, const V3& p2) {
   const core::PlaneTriangle<float> pt = core::PlaneTriangle<float>::from(p0, p1, p2);
+  put<W>(b.v0, i, pt.p0);
   put<W>(b.n, i, pt.n);
   put<W>(b.n1, i, pt.n1);
   put<W>(b.n2, i, pt.n2);
-  b.d[i] = pt.d, b.d1[i] = pt.d1, b.d2[i] = pt.d2;
 }
 
 template <int W>

@@ -1,8 +1,9 @@
 // The notes' algorithm 1 on float lanes: ray/plane distance, then the two half-plane
 // (edge plane) tests on the hit point, with the planes precomputed per triangle (Havel &
-// Herout 2010). The SIMD twin of src/core/triangle_plane.h: the same float operations in
-// the same order (no FMA, a true division), so every lane gives the oracle's hit/miss and
-// t, u, v bit for bit.
+// Herout 2010), relative to the triangle's first vertex v0 (accurate far from the origin).
+// The SIMD twin of src/core/triangle_plane.h: the same float operations in the same order
+// (no FMA, a true division), so every lane gives the oracle's hit/miss and t, u, v bit for
+// bit.
 #pragma once
 #include <limits>
 
@@ -22,9 +23,9 @@ struct PlaneTest {
   using M = MaskB<Arch>;
 
   using Rays = RayLanes<Arch>;
-  /// Triangle lanes: plane n.x = d, edge planes (n1, d1) and (n2, d2).
+  /// Triangle lanes: reference vertex v0, plane n.(x - v0) = 0, edge plane gradients n1, n2.
   struct Tris {
-    B nx, ny, nz, d, n1x, n1y, n1z, d1, n2x, n2y, n2z, d2;
+    B v0x, v0y, v0z, nx, ny, nz, n1x, n1y, n1z, n2x, n2y, n2z;
   };
   /// Candidate hits: `valid` lanes are hit with tmin <= t < upper.
   struct Cand {
@@ -66,15 +67,15 @@ auto PlaneTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
 
 template <class Arch>
 auto PlaneTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {
-  return {B::load_aligned(b.n[0]),  B::load_aligned(b.n[1]),  B::load_aligned(b.n[2]),  B::load_aligned(b.d),
-          B::load_aligned(b.n1[0]), B::load_aligned(b.n1[1]), B::load_aligned(b.n1[2]), B::load_aligned(b.d1),
-          B::load_aligned(b.n2[0]), B::load_aligned(b.n2[1]), B::load_aligned(b.n2[2]), B::load_aligned(b.d2)};
+  return {B::load_aligned(b.v0[0]), B::load_aligned(b.v0[1]), B::load_aligned(b.v0[2]), B::load_aligned(b.n[0]),
+          B::load_aligned(b.n[1]),  B::load_aligned(b.n[2]),  B::load_aligned(b.n1[0]), B::load_aligned(b.n1[1]),
+          B::load_aligned(b.n1[2]), B::load_aligned(b.n2[0]), B::load_aligned(b.n2[1]), B::load_aligned(b.n2[2])};
 }
 
 template <class Arch>
 auto PlaneTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris {
-  return {B(b.n[0][j]),  B(b.n[1][j]),  B(b.n[2][j]),  B(b.d[j]),  B(b.n1[0][j]), B(b.n1[1][j]),
-          B(b.n1[2][j]), B(b.d1[j]),    B(b.n2[0][j]), B(b.n2[1][j]), B(b.n2[2][j]), B(b.d2[j])};
+  return {B(b.v0[0][j]), B(b.v0[1][j]), B(b.v0[2][j]), B(b.n[0][j]),  B(b.n[1][j]),  B(b.n[2][j]),
+          B(b.n1[0][j]), B(b.n1[1][j]), B(b.n1[2][j]), B(b.n2[0][j]), B(b.n2[1][j]), B(b.n2[2][j])};
 }
 
 template <class Arch>
@@ -84,13 +85,15 @@ auto PlaneTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B den = tri.nx * r.dx + tri.ny * r.dy + tri.nz * r.dz;
   M valid = finite_nonzero<Arch>(den);
   if (xsimd::none(valid)) return {valid, den, den, den};
-  // Ray/plane distance t = (d - n . org) / den, in [tmin, upper).
-  const B t = (tri.d - (tri.nx * r.ox + tri.ny * r.oy + tri.nz * r.oz)) / den;
+  // Ray/plane distance t = n . a / den with a = v0 - org (nearby numbers subtracted
+  // first), in [tmin, upper).
+  const B ax = tri.v0x - r.ox, ay = tri.v0y - r.oy, az = tri.v0z - r.oz;
+  const B t = (tri.nx * ax + tri.ny * ay + tri.nz * az) / den;
   valid = valid & (r.tmin <= t) & (t < upper);
-  // Half-plane tests on q = org + t dir: u = n1 . q + d1, v = n2 . q + d2.
-  const B qx = r.ox + t * r.dx, qy = r.oy + t * r.dy, qz = r.oz + t * r.dz;
-  const B u = tri.n1x * qx + tri.n1y * qy + tri.n1z * qz + tri.d1;
-  const B v = tri.n2x * qx + tri.n2y * qy + tri.n2z * qz + tri.d2;
+  // Half-plane tests on the hit point relative to v0, q = t dir - a: u = n1 . q, v = n2 . q.
+  const B qx = t * r.dx - ax, qy = t * r.dy - ay, qz = t * r.dz - az;
+  const B u = tri.n1x * qx + tri.n1y * qy + tri.n1z * qz;
+  const B v = tri.n2x * qx + tri.n2y * qy + tri.n2z * qz;
   valid = valid & (u >= zero) & (v >= zero) & (u + v <= one);
   return {valid, t, u, v};
 }

@@ -24,16 +24,16 @@ struct alignas(64) MollerBlock {
 static_assert(sizeof(MollerBlock<4>) == 256 && sizeof(MollerBlock<8>) == 448 &&
               sizeof(MollerBlock<16>) == 832, "MollerBlock: 52 B per triangle, 64 B aligned");
 
-/// Plane block (the notes' algorithm 1): the supporting plane n.x = d and the two edge
-/// planes giving u = n1.q + d1, v = n2.q + d2 for q in the plane; read by plane.h.
+/// Plane block (the notes' algorithm 1): the reference vertex v0, the supporting plane
+/// n.(x - v0) = 0 and the two edge planes giving u = n1.(q - v0), v = n2.(q - v0) for q in the
+/// plane; read by plane.h. Relative to v0, the planes' offsets are zero: v0's 12 bytes
+/// replace the three absolute offsets, which cancelled far from the origin (issue 5).
 template <int W>
 struct alignas(64) PlaneBlock {
+  float v0[3][W];          // 12W bytes: reference vertex p0
   float n[3][W];           // 12W bytes: plane normal
-  float d[W];              //  4W bytes: plane offset
   float n1[3][W];          // 12W bytes: edge plane of u
-  float d1[W];             //  4W bytes
   float n2[3][W];          // 12W bytes: edge plane of v
-  float d2[W];             //  4W bytes
   std::uint32_t prim[W];   //  4W bytes
 };                         // 52 bytes per triangle (W = 4: 208 B padded to 256, W = 8: 416 to 448)
 static_assert(sizeof(PlaneBlock<4>) == 256 && sizeof(PlaneBlock<8>) == 448 &&

@@ -209,6 +209,53 @@ TEST_CASE("triangle: float and double tests agree with a long-double reference a
   CHECK(t_err_double_max < 1e-13);
 }
 
+// Issue 5: the same well-conditioned pairs moved far from the origin (triangle and origin by
+// the same float offset; the reference takes the moved, rounded floats). The plane test used
+// to cancel there (t median 5e-2 at 1e6); with its planes stored relative to p0 it, and every
+// other test, keeps the accuracy it has at the origin.
+TEST_CASE("triangle: every test keeps t and the hit/miss decision accurate far from the origin") {
+  constexpr int kCount = 20000;
+  constexpr double kBand = 1e-5;
+  for (float offset : {1e3f, 1e5f, 1e6f}) {
+    std::mt19937 rng(7);
+    const Vec3f shift(offset, -offset, 0.5f * offset);
+    std::vector<double> t_err_float[3];
+    double t_err_double_max = 0;
+    int far_disagree[3] = {}, ref_hits = 0;
+    for (int s = 0; s < kCount; ++s) {
+      Sample smp = conditioned_sample(rng);
+      smp.tri = {smp.tri.p0 + shift, smp.tri.p1 + shift, smp.tri.p2 + shift};
+      smp.ray.org += shift;
+      const Reference ref = reference(smp.ray, smp.tri);
+      ref_hits += ref.hit;
+      for (int k = 0; k < 3; ++k) {
+        TriHit<float> hf{};
+        TriHit<double> hd{};
+        const bool hit_float = run(kTests[k], smp.ray, smp.tri, hf);
+        const bool hit_double = run(kTests[k], smp.ray, smp.tri, hd);
+        if (ref.margin >= kBand) far_disagree[k] += (hit_float != ref.hit) + (hit_double != ref.hit);
+        if (!ref.hit) continue;
+        if (hit_float) t_err_float[k].push_back(double(std::abs((L(hf.t) - ref.t) / ref.t)));
+        if (hit_double) t_err_double_max = std::max(t_err_double_max, double(std::abs((L(hd.t) - ref.t) / ref.t)));
+      }
+    }
+    CAPTURE(offset);
+    CHECK(ref_hits > kCount / 10);
+    for (int k = 0; k < 3; ++k) {
+      CAPTURE(name(kTests[k]));
+      REQUIRE(!t_err_float[k].empty());
+      const double median = percentile(t_err_float[k], 0.5), worst = percentile(t_err_float[k], 1.0);
+      MESSAGE("offset " << offset << " " << name(kTests[k]) << " float t relative error: median " << median << ", max "
+                        << worst << "; far disagreements " << far_disagree[k]);
+      CHECK(far_disagree[k] == 0);
+      CHECK(median < 2e-7);
+      CHECK(worst < 1e-5);
+    }
+    MESSAGE("offset " << offset << " double t relative error, max over all tests: " << t_err_double_max);
+    CHECK(t_err_double_max < 1e-13);
+  }
+}
+
 // Unconditioned input (slivers, grazing rays, far origins): no NaN, hits inside [tmin, tmax).
 TEST_CASE("triangle: ill-conditioned random input never yields NaN or an out-of-range t") {
   std::mt19937 rng(7);

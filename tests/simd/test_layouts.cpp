@@ -67,9 +67,10 @@ TEST_CASE_TEMPLATE("blocks hold the oracle's values, NaN padding and invalid ids
     CHECK(m[b].ne2[2][i] == -e2.z);
     CHECK(m[b].n[1][i] == n.y);
     const auto pt = volley::core::PlaneTriangle<float>::from(p0, p1, p2);
-    CHECK(p[b].d[i] == pt.d);
+    CHECK(p[b].v0[1][i] == pt.p0.y);
+    CHECK(p[b].n[2][i] == pt.n.z);
+    CHECK(p[b].n1[1][i] == pt.n1.y);
     CHECK(p[b].n2[0][i] == pt.n2.x);
-    CHECK(p[b].d1[i] == pt.d1);
     if (soup.ids[t] == 999) {
       CHECK(std::isnan(w[b].p[1][1][i]));  // zero area: a NaN lane
     } else {
@@ -81,7 +82,8 @@ TEST_CASE_TEMPLATE("blocks hold the oracle's values, NaN padding and invalid ids
     CHECK(m[1].prim[i] == kInvalidPrim);
     CHECK(std::isnan(m[1].v0[0][i]));
     CHECK(std::isnan(m[1].n[2][i]));
-    CHECK(std::isnan(p[1].d2[i]));
+    CHECK(std::isnan(p[1].v0[0][i]));
+    CHECK(std::isnan(p[1].n2[2][i]));
     CHECK(std::isnan(w[1].p[0][0][i]));
     CHECK(w[1].prim[i] == kInvalidPrim);
   }
