@@ -1,7 +1,8 @@
 // Möller–Trumbore (1997) ray/triangle test on float lanes: the 3x3 barycentric system
 // solved by Cramer's rule, division-free. The SIMD twin of src/core/triangle_moller.h:
-// the same float operations in the same order, fused where the oracle fuses (FMA;
-// kMollerFused), so every lane gives the oracle's hit/miss and t, u, v bit for bit.
+// the same float operations in the same order, fused where the ISA has FMA (kMollerFused),
+// so every lane gives the hit/miss and t, u, v of the oracle's variant for its ISA
+// (intersect_moller<T, core::moller_fused_for(isa)>) bit for bit.
 //
 // The hit decision uses the determinants themselves, with det's sign folded in:
 // u det >= 0, v det >= 0, (u + v) det <= |det|, tmin |det| <= t det < upper |det|. The
@@ -17,13 +18,13 @@
 
 namespace volley::simd::detail {
 
-/// Whether the Möller–Trumbore kernels fuse their products: as the oracle does
-/// (core::kMollerFused). SSE4.2 has no FMA instruction and fuses lane by lane through
-/// std::fma (fused_mul_add), exact but slow.
-/// (Not read from core/triangle_moller.h, which the per-ISA files must not include;
-/// tests/simd/test_kernels_oracle.cpp asserts that the two agree.)
+/// Whether the Möller–Trumbore kernels fuse their products: where the ISA has an FMA
+/// instruction (AVX2, AVX-512). SSE4.2 computes unfused: emulating FMA there costs 15x.
+/// The oracle's side of this rule is core::moller_fused_for (not included here: the per-ISA
+/// files must not include core headers); tests/simd/test_kernels_oracle.cpp asserts that
+/// the two agree for every ISA.
 template <class Arch>
-inline constexpr bool kMollerFused = true;
+inline constexpr bool kMollerFused = kHasFma<Arch>;
 
 /// Möller–Trumbore on kLanes<Arch> (ray, triangle) pairs: one ray against a block, or
 /// one triangle against a packet's lanes. Reads MollerBlock<kLanes<Arch>>.
@@ -64,7 +65,7 @@ struct MollerTest {
   [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
 
  private:
-  /// a b + c: one rounding when fused (the oracle's std::fma), two otherwise.
+  /// a b + c: one rounding when fused (the oracle's std::fma), two otherwise (Fused = false).
   [[gnu::always_inline]] inline static B mul_add(B a, B b, B c) {
     if constexpr (kFused)
       return fused_mul_add<Arch>(a, b, c);

@@ -159,7 +159,7 @@ bool Accel::Impl::trace_triangles_scalar(const core::RayT<float>& r, Hit& hit) c
         ok = core::intersect_plane(q, plane_triangles[prim], h);
         break;
       case TriangleTest::moller:
-        ok = core::intersect_moller(q, p[0], p[1], p[2], h);
+        ok = core::intersect_moller<float, core::moller_fused_for(Isa::scalar)>(q, p[0], p[1], p[2], h);
         break;
       case TriangleTest::watertight:
         ok = core::intersect_watertight(q, woop, p[0], p[1], p[2], h);

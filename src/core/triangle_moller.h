@@ -4,14 +4,35 @@
 #pragma once
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "core/geometry.h"
+#include "volley/options.h"
 
 namespace volley::core {
 
-/// The default formulation of intersect_moller: fused (std::fma), as the AVX2 and AVX-512
-/// kernels compute it. The SSE4.2 kernels (no FMA instruction) match Fused = false.
-inline constexpr bool kMollerFused = true;
+/// Whether the Möller–Trumbore kernels of `isa` fuse their products (intersect_moller's
+/// `Fused`): only where the ISA has an FMA instruction, AVX2 and AVX-512. SSE4.2 and the
+/// scalar oracle (built for x86-64-v2, where std::fma is a libm call of ~2 ns) compute
+/// unfused. The two formulations can differ on hit/miss for ill-conditioned rays
+/// (ACCURACY.md item 13), so whatever compares an ISA with the oracle uses this variant.
+/// `automatic` is no formulation: resolve it first (throws std::invalid_argument).
+constexpr bool moller_fused_for(volley::Isa isa) {
+  switch (isa) {
+    case volley::Isa::scalar:
+    case volley::Isa::sse42:
+      return false;
+    case volley::Isa::avx2:
+    case volley::Isa::avx512:
+      return true;
+    case volley::Isa::automatic:
+      break;
+  }
+  throw std::invalid_argument("moller_fused_for: resolve Isa::automatic to an ISA first");
+}
+
+/// The default formulation of intersect_moller: the scalar oracle's (Isa::scalar, unfused).
+inline constexpr bool kMollerFused = moller_fused_for(volley::Isa::scalar);
 
 namespace moller_detail {
 
@@ -51,10 +72,11 @@ T dot3(const Vec3<T>& a, const Vec3<T>& b) {
 ///
 /// The determinants are the triple products of Moller-Trumbore, factored as in Embree's
 /// Moller intersector so the normal n = (p1-p0) x (p2-p0) is computed once: a triangle with
-/// n == 0 exactly (is_degenerate) gets det == 0 and never hits. With `Fused` (default,
-/// kMollerFused) the dot and cross products use std::fma as the AVX2/AVX-512 kernels'
-/// FMA instructions do; n and the edges are never fused (the kernels' blocks store them).
-/// This is the accuracy reference for the SIMD twins (bit-identical lanes).
+/// n == 0 exactly (is_degenerate) gets det == 0 and never hits. With `Fused` the dot and
+/// cross products use std::fma as the AVX2/AVX-512 kernels' FMA instructions do; without
+/// (the default, kMollerFused) each product and sum rounds, as in the SSE4.2 kernels. n and
+/// the edges are never fused (the kernels' blocks store them). The accuracy reference for
+/// the SIMD twins: intersect_moller<T, moller_fused_for(isa)> is bit-identical to isa's lanes.
 /// NaN or Inf anywhere in the input makes a comparison below fail: no hit, never NaN out.
 /// Pure function, thread safe.
 template <class T, bool Fused = kMollerFused>
@@ -79,10 +101,9 @@ bool intersect_moller(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, 
   T u = dot3<Fused>(ne2, r), v = dot3<Fused>(e1, r), t = dot3<Fused>(c, n);
   // Fold det's sign in (exact): the tests become those of u, v, t against |det|.
   if (det < 0) u = -u, v = -v, t = -t;
-  // Half-plane tests; each comparison is false for NaN.
-  if (!(u >= 0 && v >= 0 && u + v <= den)) return false;
-  // Half-open range tmin <= t < tmax; false for NaN.
-  if (!(ray.tmin * den <= t && t < ray.tmax * den)) return false;
+  // Half-plane tests and the half-open range tmin <= t < tmax, as one branch (`&`, not `&&`:
+  // an aimed ray's hit/miss is hard to predict); each comparison is false for NaN.
+  if (!((u >= 0) & (v >= 0) & (u + v <= den) & (ray.tmin * den <= t) & (t < ray.tmax * den))) return false;
 
   hit = {t / den, u / den, v / den};
   return true;

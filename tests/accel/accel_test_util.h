@@ -83,9 +83,10 @@ inline bool finite_ray(const Ray& r) {
   return !std::isnan(r.tmin) && !std::isnan(r.tmax);
 }
 
-/// Closest hit by brute force with the scalar oracle (the oracle's loop: a triangle
-/// replaces the hit when t < the current bound). Rays the API rejects miss.
-inline Hit brute_force(const Soup& soup, TriangleTest test, const Ray& ray) {
+/// Closest hit by brute force with the scalar oracle in its variant for `isa`'s kernels
+/// (moller fuses on AVX2/AVX-512 only: core::moller_fused_for) (the oracle's loop: a
+/// triangle replaces the hit when t < the current bound). Rays the API rejects miss.
+inline Hit brute_force(const Soup& soup, TriangleTest test, const Ray& ray, Isa isa = Isa::scalar) {
   Hit best;
   if (!finite_ray(ray)) return best;
   const glm::vec3 o(ray.org[0], ray.org[1], ray.org[2]), d(ray.dir[0], ray.dir[1], ray.dir[2]);
@@ -93,12 +94,20 @@ inline Hit brute_force(const Soup& soup, TriangleTest test, const Ray& ray) {
   for (std::size_t i = 0; i < soup.size(); ++i) {
     volley::core::TriHit<float> h;
     if (volley::core::intersect_triangle(test, volley::core::RayT<float>{o, ray.tmin, d, upper}, soup.vertex(i, 0),
-                                         soup.vertex(i, 1), soup.vertex(i, 2), h)) {
+                                         soup.vertex(i, 1), soup.vertex(i, 2), h, isa)) {
       upper = h.t;
       best = {h.t, h.u, h.v, static_cast<std::uint32_t>(i)};
     }
   }
   return best;
+}
+
+/// brute_force for every ray of `rays`.
+inline std::vector<Hit> brute_force_all(const Soup& soup, TriangleTest test, const std::vector<Ray>& rays,
+                                        Isa isa = Isa::scalar) {
+  std::vector<Hit> out(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) out[i] = brute_force(soup, test, rays[i], isa);
+  return out;
 }
 
 /// Same answer: the same prim, or both hits at the same t (a tie between triangles).

@@ -106,7 +106,7 @@ TEST_CASE("accel: closest hit equals brute force over the scalar oracle on a ran
       const glm::vec3 d = glm::vec3(pos(rng), pos(rng), pos(rng)) - o;
       const Ray ray = make_ray(o, d);
       const Hit h = accel.intersect(ray);
-      // Brute force with the same oracle test.
+      // Brute force with the same oracle test, in its variant for `isa`.
       float best = INFINITY;
       std::uint32_t best_prim = volley::kInvalidPrim;
       for (int i = 0; i < n; ++i) {
@@ -114,7 +114,7 @@ TEST_CASE("accel: closest hit equals brute force over the scalar oracle on a ran
         const glm::vec3 p1(xyz[9 * i + 3], xyz[9 * i + 4], xyz[9 * i + 5]);
         const glm::vec3 p2(xyz[9 * i + 6], xyz[9 * i + 7], xyz[9 * i + 8]);
         volley::core::TriHit<float> th;
-        if (volley::core::intersect_triangle(test, volley::core::RayT<float>{o, 0.0f, d, best}, p0, p1, p2, th)) {
+        if (volley::core::intersect_triangle(test, volley::core::RayT<float>{o, 0.0f, d, best}, p0, p1, p2, th, isa)) {
           best = th.t;
           best_prim = std::uint32_t(i);
         }

@@ -42,8 +42,8 @@ inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 inline constexpr TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};
 
 /// t, u, v of the kernels may differ from the oracle's by at most this many ulps. The
-/// kernels perform the oracle's float operations in the same order (fused exactly where it
-/// fuses, true divisions), so the bound is 0: bit-identical.
+/// kernels perform the float operations of the oracle's variant for their ISA in the same
+/// order (fused exactly where it fuses, true divisions), so the bound is 0: bit-identical.
 inline constexpr std::uint32_t kMaxUlps = 0;
 
 /// True (and a MESSAGE) when this CPU cannot run Arch's kernels: the test case returns.
@@ -94,22 +94,25 @@ volley::simd::AlignedVector<volley::simd::BlockFor<Test, kLanes<Arch>>> pack(con
   return blocks;
 }
 
-/// The scalar oracle on triangle t of `soup` with the search interval [ray.tmin, upper).
-inline bool oracle(TriangleTest test, const Ray& ray, float upper, const Soup& soup, std::size_t t,
-                   volley::core::TriHit<float>& h) {
+/// The scalar oracle, in its variant for Arch's kernels (core::moller_fused_for), on
+/// triangle t of `soup` with the search interval [ray.tmin, upper).
+template <class Arch>
+bool oracle(TriangleTest test, const Ray& ray, float upper, const Soup& soup, std::size_t t,
+            volley::core::TriHit<float>& h) {
   const volley::core::RayT<float> r{V3(ray.org[0], ray.org[1], ray.org[2]), ray.tmin,
                                     V3(ray.dir[0], ray.dir[1], ray.dir[2]), upper};
-  return volley::core::intersect_triangle(test, r, soup.vertex(t, 0), soup.vertex(t, 1), soup.vertex(t, 2), h);
+  return volley::core::intersect_triangle(test, r, soup.vertex(t, 0), soup.vertex(t, 1), soup.vertex(t, 2), h,
+                                          volley::simd::kIsaOf<Arch>);
 }
 
-/// Closest hit by the oracle over triangles first .. last in order, as the kernels define
+/// Closest hit by Arch's oracle over triangles first .. last in order, as the kernels define
 /// it: upper = min(hit.t, tmax) (NaN tmax: nothing), shrinking with each accepted hit.
-inline Hit oracle_closest(TriangleTest test, const Ray& ray, Hit hit, const Soup& soup, std::size_t first,
-                          std::size_t last) {
+template <class Arch>
+Hit oracle_closest(TriangleTest test, const Ray& ray, Hit hit, const Soup& soup, std::size_t first, std::size_t last) {
   float upper = hit.t < ray.tmax ? hit.t : ray.tmax;
   for (std::size_t t = first; t < last; ++t) {
     volley::core::TriHit<float> h;
-    if (oracle(test, ray, upper, soup, t, h)) {
+    if (oracle<Arch>(test, ray, upper, soup, t, h)) {
       hit = {h.t, h.u, h.v, soup.ids[t]};
       upper = h.t;
     }
@@ -117,11 +120,12 @@ inline Hit oracle_closest(TriangleTest test, const Ray& ray, Hit hit, const Soup
   return hit;
 }
 
-/// Any hit by the oracle over triangles first .. last within [tmin, tmax).
-inline bool oracle_occluded(TriangleTest test, const Ray& ray, const Soup& soup, std::size_t first, std::size_t last) {
+/// Any hit by Arch's oracle over triangles first .. last within [tmin, tmax).
+template <class Arch>
+bool oracle_occluded(TriangleTest test, const Ray& ray, const Soup& soup, std::size_t first, std::size_t last) {
   for (std::size_t t = first; t < last; ++t) {
     volley::core::TriHit<float> h;
-    if (oracle(test, ray, ray.tmax, soup, t, h)) return true;
+    if (oracle<Arch>(test, ray, ray.tmax, soup, t, h)) return true;
   }
   return false;
 }
@@ -227,8 +231,8 @@ Agreement compare_all_forms(const Soup& soup, const std::vector<Ray>& rays, cons
   std::vector<Hit> want(rays.size());
   std::vector<bool> want_occ(rays.size());
   for (std::size_t r = 0; r < rays.size(); ++r) {
-    want[r] = oracle_closest(Test, rays[r], Hit{}, soup, 0, soup.size());
-    want_occ[r] = oracle_occluded(Test, rays[r], soup, 0, soup.size());
+    want[r] = oracle_closest<Arch>(Test, rays[r], Hit{}, soup, 0, soup.size());
+    want_occ[r] = oracle_occluded<Arch>(Test, rays[r], soup, 0, soup.size());
     const auto pr = volley::simd::prepare_ray(rays[r], Test == TriangleTest::watertight);
     Hit got;
     volley::simd::RayBlockKernels<Arch, Test>::intersect(pr, blocks.data(), nblocks, got);

@@ -31,9 +31,10 @@ void single_ray(unsigned seed, int leaves, int rays_per_leaf) {
       const auto pr = volley::simd::prepare_ray(ray, Test == TriangleTest::watertight);
       Hit got = hit;
       RayBlockKernels<Arch, Test>::intersect(pr, blocks.data(), static_cast<std::uint32_t>(blocks.size()), got);
-      closest.check(got, oracle_closest(Test, ray, hit, s, 0, s.size()), ray, where);
-      any.check_bool(RayBlockKernels<Arch, Test>::occluded(pr, blocks.data(), static_cast<std::uint32_t>(blocks.size())),
-                     oracle_occluded(Test, ray, s, 0, s.size()), ray, where + " (occluded)");
+      closest.check(got, oracle_closest<Arch>(Test, ray, hit, s, 0, s.size()), ray, where);
+      any.check_bool(
+          RayBlockKernels<Arch, Test>::occluded(pr, blocks.data(), static_cast<std::uint32_t>(blocks.size())),
+          oracle_occluded<Arch>(Test, ray, s, 0, s.size()), ray, where + " (occluded)");
     }
   }
   INFO(closest.first);
@@ -107,10 +108,10 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
         const Ray ray = volley::simd::ray_of(packet, i);
         const bool active = packet.active >> i & 1;
         const Hit before = volley::simd::hit_of(start, i);
-        const Hit want = active ? oracle_closest(Test, ray, before, s, 0, s.size()) : before;
+        const Hit want = active ? oracle_closest<Arch>(Test, ray, before, s, 0, s.size()) : before;
         closest.check(volley::simd::hit_of(got, i), want, ray, where + " x block, lane " + std::to_string(i));
         per_triangle.check(volley::simd::hit_of(got_tri, i), want, ray, where + " x triangle, lane " + std::to_string(i));
-        const bool want_occ = (ask >> i & 1) && oracle_occluded(Test, ray, s, 0, s.size());
+        const bool want_occ = (ask >> i & 1) && oracle_occluded<Arch>(Test, ray, s, 0, s.size());
         any.check_bool(occ >> i & 1, want_occ, ray, where + " occluded, lane " + std::to_string(i));
       }
     }
@@ -156,13 +157,30 @@ TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: watertigh
   all_forms<Arch, TriangleTest::watertight>(33);
 }
 
-// The bit-identity above is what proves the Moller kernels really fuse (an xsimd::fma that
-// silently splits into a multiply and an add, as 8.1's does on AVX-512, would pass any
-// tolerance test): it can only fail if the fused and unfused oracles differ on such rays.
-static_assert(volley::simd::detail::kMollerFused<volley::simd::Sse42> == volley::core::kMollerFused &&
-                  volley::simd::detail::kMollerFused<volley::simd::Avx2> == volley::core::kMollerFused &&
-                  volley::simd::detail::kMollerFused<volley::simd::Avx512> == volley::core::kMollerFused,
-              "the Moller kernels must fuse exactly where the oracle does");
+// The rule: the Moller kernels fuse exactly where the ISA has an FMA instruction (AVX2,
+// AVX-512; not SSE4.2, where it would be a libm call per lane), and each ISA is compared
+// with the oracle variant core::moller_fused_for names for it. The scalar oracle's own
+// default is unfused (x86-64-v2 build, no FMA). The bit-identity above is what proves the
+// kernels fuse, or do not, as claimed (an xsimd::fma that silently splits into a multiply
+// and an add, as 8.1's does on AVX-512, would pass any tolerance test): it can only fail
+// if the fused and unfused oracles differ on such rays, which the case below checks.
+template <class Arch>
+constexpr bool fuses_by_the_rule() {
+  using volley::simd::detail::kHasFma;
+  using volley::simd::detail::kMollerFused;
+  return kMollerFused<Arch> == kHasFma<Arch> &&
+         kMollerFused<Arch> == volley::core::moller_fused_for(volley::simd::kIsaOf<Arch>);
+}
+static_assert(fuses_by_the_rule<volley::simd::Sse42>() && fuses_by_the_rule<volley::simd::Avx2>() &&
+                  fuses_by_the_rule<volley::simd::Avx512>(),
+              "the Moller kernels fuse where the ISA has FMA, and the oracle's variant for each ISA must match");
+static_assert(!volley::simd::detail::kHasFma<volley::simd::Sse42> &&
+                  volley::simd::detail::kHasFma<volley::simd::Avx2> &&
+                  volley::simd::detail::kHasFma<volley::simd::Avx512>,
+              "FMA: AVX2 (fma3) and AVX-512 have it, SSE4.2 does not");
+static_assert(!volley::core::kMollerFused &&
+                  volley::core::kMollerFused == volley::core::moller_fused_for(volley::Isa::scalar),
+              "the scalar oracle's default is unfused (no FMA in the x86-64-v2 baseline)");
 
 TEST_CASE("moller oracle: the fused and unfused variants differ, so bit-identity checks the FMA") {
   Generator g(44);

@@ -60,10 +60,11 @@ void facade_agrees(TriangleTest test) {
       for (int i = 0; i < volley::simd::kPacketSize; ++i) {
         const Ray r = volley::simd::ray_of(packet, i);
         const bool active = packet.active >> i & 1;
-        const Hit want = active ? oracle_closest(test, r, Hit{}, soup, first, last) : Hit{};
+        const Hit want = active ? oracle_closest<Arch>(test, r, Hit{}, soup, first, last) : Hit{};
         a.check(volley::simd::hit_of(hits, i), want, r, where + " packet");
         a.check(volley::simd::hit_of(hits_prepared, i), want, r, where + " prepared packet");
-        a.check_bool(occ >> i & 1, active && oracle_occluded(test, r, soup, first, last), r, where + " packet occluded");
+        a.check_bool(occ >> i & 1, active && oracle_occluded<Arch>(test, r, soup, first, last), r,
+                     where + " packet occluded");
         if (!active) continue;
         Hit single;
         kernels->intersect(r, ranges[gi], single);
@@ -71,7 +72,7 @@ void facade_agrees(TriangleTest test) {
         Hit prepared;
         kernels->intersect(kernels->prepare(r), ranges[gi], prepared);
         a.check(prepared, want, r, where + " prepared");
-        a.check_bool(kernels->occluded(r, ranges[gi]), oracle_occluded(test, r, soup, first, last), r,
+        a.check_bool(kernels->occluded(r, ranges[gi]), oracle_occluded<Arch>(test, r, soup, first, last), r,
                      where + " occluded");
       }
     }
