@@ -87,7 +87,9 @@ void shade_batch(const Scene& scene, unsigned stages, ShadeFn one, ContinueFn th
   const std::vector<io::Material>& materials = scene.materials();
   const bool shadows_on = (stages & kShadows) != 0;
   const std::size_t light_count = shadows_on ? scene.lights().size() : 0;
-  std::vector<LightLanes> per_light(light_count);
+  // Per thread and reused: this runs once per bounce of every tile.
+  thread_local std::vector<LightLanes> per_light;
+  per_light.resize(light_count);
 
   if (triangles == 0) {  // polygons only: nothing to gather
     for (std::size_t i = 0; i < n; ++i) sum[paths[i].pixel] += one(scene, paths[i], hits[i], max_depth, next, shadows);
