@@ -8,6 +8,7 @@
 #include "accuracy/image_error.h"
 #include "accuracy/long_run.h"
 #include "accuracy/runner.h"
+#include "accuracy/spawn_check.h"
 
 namespace volley::accuracy {
 
@@ -46,9 +47,11 @@ void write_csv(const Report& report, const std::filesystem::path& file);
 /// Writes the PNG with gnuplot; false (and `message` says why) when gnuplot is missing or fails.
 bool write_plot(const Report& report, const std::filesystem::path& file, std::string& message);
 
-/// long.md: per ISA, mode, mesh and offset, rays, leaks, NaN and time; totals per ISA.
-void write_long_markdown(const std::vector<LongRow>& rows, std::size_t rays_per_isa, const std::string& command,
-                         double seconds, const std::filesystem::path& file);
+/// long.md: per ISA, mode, mesh and offset, rays, leaks, NaN and time; totals per ISA;
+/// then the self-intersection check of spawned rays per scale and ISA.
+void write_long_markdown(const std::vector<LongRow>& rows, std::size_t rays_per_isa,
+                         const std::vector<SpawnRow>& spawns, const std::string& command, double seconds,
+                         const std::filesystem::path& file);
 
 /// "1e+06" -> "1e6", 0 -> "0": offsets as the report prints them.
 std::string offset_text(double offset);

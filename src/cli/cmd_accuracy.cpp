@@ -1,5 +1,6 @@
 // volley accuracy: the accuracy report (run time against error) of every triangle test x
 // ISA x query mode x traversal, written to perf/accuracy/ (ACCURACY.md, issue 5).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "accuracy/long_run.h"
 #include "accuracy/report.h"
 #include "accuracy/runner.h"
+#include "accuracy/spawn_check.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/progress.h"
@@ -142,15 +144,27 @@ int run_long(const AccuracyArgs& a, const std::vector<Isa>& isas, const std::vec
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("accuracy --long");
   const std::size_t per_isa = std::size_t(a.long_rays);
-  const std::vector<acc::LongRow> rows = acc::long_run(per_isa, isas, modes, [&bar](double f) { bar.update(f); });
+  const std::vector<acc::LongRow> rows = acc::long_run(per_isa, isas, modes, [&bar](double f) { bar.update(0.9 * f); });
+  // Self-intersection: 1e6 spawned rays per scale and ISA (a tenth of --long-rays).
+  std::vector<acc::SpawnRow> spawns;
+  const std::size_t per_scale = std::max<std::size_t>(1000, per_isa / 10);
+  for (std::size_t i = 0; i < isas.size(); ++i)
+    for (std::size_t k = 0; k < acc::kSpawnScales.size(); ++k) {
+      spawns.push_back(acc::spawn_check(acc::kSpawnScales[k], per_scale, isas[i]));
+      bar.update(0.9 +
+                 0.1 * double(i * acc::kSpawnScales.size() + k + 1) / double(isas.size() * acc::kSpawnScales.size()));
+    }
   bar.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const fs::path file = fs::path(a.output) / "long.md";
-  acc::write_long_markdown(rows, per_isa, command_line(a), seconds, file);
-  std::size_t rays = 0, leaks = 0, nan = 0;
+  acc::write_long_markdown(rows, per_isa, spawns, command_line(a), seconds, file);
+  std::size_t rays = 0, leaks = 0, nan = 0, rehits = 0;
   for (const acc::LongRow& r : rows) rays += r.rays, leaks += r.leaks, nan += r.nan;
-  std::printf("accuracy --long: %zu rays traced (%zu ISAs x %zu modes), %zu leaks, %zu NaN, in %.0f s -> %s\n", rays,
-              isas.size(), modes.size(), leaks, nan, seconds, file.string().c_str());
+  for (const acc::SpawnRow& r : spawns) rehits += r.rehits;
+  std::printf(
+      "accuracy --long: %zu rays traced (%zu ISAs x %zu modes), %zu leaks, %zu NaN; %zu spawned rays per "
+      "scale and ISA, %zu re-hits; in %.0f s -> %s\n",
+      rays, isas.size(), modes.size(), leaks, nan, per_scale, rehits, seconds, file.string().c_str());
   return 0;
 }
 

@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <random>
 
+#include "accuracy/spawn_check.h"
 #include "io/png_writer.h"
 #include "io/scene_loader.h"
 #include "render/renderer.h"
 #include "render/pipeline.h"
 #include "render/spawn.h"
+#include "simd/dispatch.h"
 
 namespace fs = std::filesystem;
 using namespace volley;
@@ -101,41 +103,18 @@ TEST_CASE("render: the path integrator shows colour bleeding in the Cornell box"
 }
 
 TEST_CASE("render: spawned rays do not re-hit their own surface at scales 1e-3 .. 1e6") {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
-  for (float scale : {1e-3f, 1.0f, 1e3f, 1e6f}) {
-    // A tilted triangle far from the origin at this scale.
-    const glm::vec3 p0 = glm::vec3(0.3f, 0.1f, 0.7f) * scale, p1 = glm::vec3(1.2f, 0.4f, 0.9f) * scale,
-                    p2 = glm::vec3(0.5f, 1.3f, 0.2f) * scale;
-    Accel accel;
-    const float xyz[] = {p0.x, p0.y, p0.z, p1.x, p1.y, p1.z, p2.x, p2.y, p2.z};
-    const std::uint32_t idx[] = {0, 1, 2};
-    accel.add_triangles(xyz, 3, idx, 1);
-    accel.commit();
-    const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
-    int rehits = 0, spawned = 0;
-    for (int i = 0; i < 20000; ++i) {
-      float u = uni(rng), v = uni(rng);
-      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
-      const glm::vec3 target = (1 - u - v) * p0 + u * p1 + v * p2;
-      const glm::vec3 org = target + n * scale * (uni(rng) + 0.1f) + glm::vec3(uni(rng), uni(rng), uni(rng)) * scale * 0.2f;
-      const Ray ray{{org.x, org.y, org.z}, 0.0f, {target.x - org.x, target.y - org.y, target.z - org.z}, INFINITY};
-      const Hit hit = accel.intersect(ray);
-      if (!hit.hit()) continue;
-      const float b0 = 1.0f - hit.u - hit.v;
-      const glm::vec3 p = b0 * p0 + hit.u * p1 + hit.v * p2;
-      const glm::vec3 err = render::gamma(7) * (glm::abs(b0 * p0) + glm::abs(hit.u * p1) + glm::abs(hit.v * p2));
-      const glm::vec3 ng = glm::dot(n, glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2])) < 0 ? n : -n;
-      // Random directions on both sides: reflection-like and transmission-like.
-      glm::vec3 w(uni(rng) - 0.5f, uni(rng) - 0.5f, uni(rng) - 0.5f);
-      if (glm::length(w) < 1e-3f) continue;
-      ++spawned;
-      rehits += accel.occluded(render::spawn_ray(p, err, ng, glm::normalize(w)));
+  // 20,000 spawns per scale and ISA here; `volley accuracy --long` runs 1e6 (perf/accuracy/long.md).
+  std::vector<Isa> isas = {Isa::scalar};
+  for (Isa isa : {Isa::sse42, Isa::avx2, Isa::avx512})
+    if (simd::cpu_has(isa)) isas.push_back(isa);
+  for (Isa isa : isas)
+    for (float scale : accuracy::kSpawnScales) {
+      const accuracy::SpawnRow row = accuracy::spawn_check(scale, 20000, isa);
+      CAPTURE(scale);
+      CAPTURE(std::string(to_string(isa)));
+      CHECK(row.spawned == 20000);
+      CHECK(row.rehits == 0);
     }
-    CAPTURE(scale);
-    CHECK(spawned > 15000);
-    CHECK(rehits == 0);
-  }
 }
 
 TEST_CASE("render: specialised and general pipelines give the same image") {
