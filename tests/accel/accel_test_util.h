@@ -208,6 +208,34 @@ inline Soup random_soup(int n, std::uint32_t seed) {
   return soup;
 }
 
+/// Lone triangles (400, sizes 2^-6 .. 2^5 at random places in a 40-unit box) and rays from
+/// all around aimed exactly at their vertices (12 per vertex): many only touch a leaf box at
+/// a corner or an edge, where rounding decides whether the slab test lets them in.
+struct VertexAimed {
+  Soup soup;
+  std::vector<Ray> rays;
+};
+inline VertexAimed lone_triangles_vertex_aimed() {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  VertexAimed out;
+  for (int i = 0; i < 400; ++i) {
+    const float scale = std::ldexp(1.0f, static_cast<int>(rng() % 12) - 6);
+    const glm::vec3 c = 40.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
+    out.soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
+                 c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
+                 c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)));
+  }
+  for (std::size_t t = 0; t < out.soup.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      for (int r = 0; r < 12; ++r) {
+        const glm::vec3 target = out.soup.vertex(t, k);
+        const glm::vec3 o = target + 3.0f * glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f);
+        out.rays.push_back(make_ray(o, target - o));
+      }
+  return out;
+}
+
 /// Rays of every kind the traversals distinguish, in runs of 16: incoherent (mixed
 /// octants: the per-lane packet walk), pinhole 4x4 blocks (one octant: the frustum walk),
 /// axis-aligned blocks (zero components: the per-lane one-octant walk), converging

@@ -95,24 +95,9 @@ TEST_CASE("robust: rays aimed at the vertices of lone triangles miss some withou
   // corner, where rounding decides. Robust traversal finds every hit brute force finds; the
   // fast slabs must miss some on every ISA, scalar oracle included, or this test could not
   // tell the two apart.
-  std::mt19937 rng(21);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  Soup soup;
-  for (int i = 0; i < 400; ++i) {
-    const float scale = std::ldexp(1.0f, static_cast<int>(rng() % 12) - 6);
-    const glm::vec3 c = 40.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
-    soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
-             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
-             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)));
-  }
-  std::vector<Ray> rays;
-  for (std::size_t t = 0; t < soup.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      for (int r = 0; r < 12; ++r) {
-        const glm::vec3 target = soup.vertex(t, k);
-        const glm::vec3 o = target + 3.0f * glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f);
-        rays.push_back(make_ray(o, target - o));
-      }
+  const VertexAimed case_ = lone_triangles_vertex_aimed();
+  const Soup& soup = case_.soup;
+  const std::vector<Ray>& rays = case_.rays;
   std::vector<Hit> want(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) want[i] = brute_force(soup, TriangleTest::watertight, rays[i]);
   for (Isa isa : all_isas()) {

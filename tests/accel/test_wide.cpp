@@ -133,24 +133,9 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   // arithmetic and rounding decides. The padded traversal must find every hit brute force
   // finds; the unpadded variant (WideKernels<..., Robust = false>) must miss some, which
   // shows this test can fail.
-  std::mt19937 rng(21);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  Soup soup;
-  for (int i = 0; i < 400; ++i) {
-    const float scale = std::ldexp(1.0f, static_cast<int>(rng() % 12) - 6);
-    const glm::vec3 c = 40.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
-    soup.add(c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
-             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)),
-             c + scale * glm::vec3(unit(rng), unit(rng), unit(rng)));
-  }
-  std::vector<Ray> rays;
-  for (std::size_t t = 0; t < soup.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      for (int r = 0; r < 12; ++r) {
-        const glm::vec3 target = soup.vertex(t, k);
-        const glm::vec3 o = target + 3.0f * glm::vec3(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f);
-        rays.push_back(make_ray(o, target - o));
-      }
+  const VertexAimed case_ = lone_triangles_vertex_aimed();
+  const Soup& soup = case_.soup;
+  const std::vector<Ray>& rays = case_.rays;
   const auto boxes = soup.boxes();
   volley::core::BvhBuildOptions one_per_leaf;
   one_per_leaf.max_leaf_size = 1;
