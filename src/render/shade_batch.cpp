@@ -50,6 +50,15 @@ B next_float(const B& x) {
   return xsimd::select(x == zero, tiny, moved);
 }
 
+// Bit k set when lane k of `m` is true.
+std::uint32_t bits_of(const xsimd::batch_bool<float>& m) {
+  alignas(64) float f[L];
+  xsimd::select(m, B(1.0f), B(0.0f)).store_aligned(f);
+  std::uint32_t bits = 0;
+  for (int k = 0; k < L; ++k) bits |= (f[k] != 0.0f ? 1u : 0u) << k;
+  return bits;
+}
+
 // The lanes of a group, loaded from per-lane scalars.
 struct Lanes {
   alignas(64) float v[L];
@@ -141,9 +150,7 @@ void shade_batch(const Scene& scene, unsigned stages, ShadeFn one, ContinueFn th
       store(p_error, point_error);
       store(ng, normal);
       store(view, view_dir);
-      alignas(64) float facing[L];
-      xsimd::select(front, B(1.0f), B(0.0f)).store_aligned(facing);
-      for (int k = 0; k < L; ++k) front_bits |= (facing[k] != 0.0f ? 1u : 0u) << k;
+      front_bits = bits_of(front);
       const V3 kd = diffuse.load();
       const V3 abs_p = abs(p);
       const B p_max = max_of(abs_p.x, max_of(abs_p.y, abs_p.z));
@@ -159,11 +166,7 @@ void shade_batch(const Scene& scene, unsigned stages, ShadeFn one, ContinueFn th
         const B n_dot_l = dot(ng, l);  // = dot(l, ng) = dot(ns, l): products commute
         LightLanes& out = per_light[j];
         // Lit unless n.l <= 0 (a NaN n.l stays lit, as in the scalar test).
-        std::uint32_t lit = 0;
-        alignas(64) float nl[L];
-        n_dot_l.store_aligned(nl);
-        for (int k = 0; k < L; ++k) lit |= (nl[k] <= 0.0f ? 0u : 1u) << k;
-        out.lit = lit & batch;
+        out.lit = ~bits_of(n_dot_l <= B(0.0f)) & batch;
         store(kd * n_dot_l, out.diffuse_term);
         // reflect(-l, ns) = d - 2 dot(d, n) n with d = -l; then its dot with -view.
         const V3 ml{-l.x, -l.y, -l.z};
