@@ -31,7 +31,6 @@ inline constexpr bool kMollerFused = kHasFma<Arch>;
 template <class Arch>
 struct MollerTest {
   static constexpr int W = kLanes<Arch>;
-  static constexpr bool kFused = kMollerFused<Arch>;
   using Block = MollerBlock<W>;
   using B = FloatB<Arch>;
   using M = MaskB<Arch>;
@@ -67,24 +66,21 @@ struct MollerTest {
  private:
   /// a b + c: one rounding when fused (the oracle's std::fma), two otherwise (Fused = false).
   [[gnu::always_inline]] inline static B mul_add(B a, B b, B c) {
-    if constexpr (kFused)
+    if constexpr (kMollerFused<Arch>)
       return fused_mul_add<Arch>(a, b, c);
     else
       return a * b + c;
   }
   /// a b - c d: the oracle's diff_of_products (fused: fma(a, b, -(c d))).
   [[gnu::always_inline]] inline static B diff_of_products(B a, B b, B c, B d) {
-    if constexpr (kFused)
+    if constexpr (kMollerFused<Arch>)
       return fused_mul_sub<Arch>(a, b, c * d);
     else
       return a * b - c * d;
   }
   /// ax bx + ay by + az bz, left to right: the oracle's dot3.
   [[gnu::always_inline]] inline static B dot3(B ax, B ay, B az, B bx, B by, B bz) {
-    if constexpr (kFused)
-      return mul_add(az, bz, mul_add(ay, by, ax * bx));
-    else
-      return ax * bx + ay * by + az * bz;
+    return mul_add(az, bz, mul_add(ay, by, ax * bx));
   }
 };
 
@@ -137,7 +133,8 @@ auto MollerTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B den = det ^ sign;
   const B u = un ^ sign, v = vn ^ sign, t = tn ^ sign;
   // det finite and nonzero (parallel ray, degenerate triangle, padding and NaN fail);
-  // every comparison is false for NaN.
+  // every comparison is false for NaN. Without mask registers the test reuses den
+  // (finite_nonzero would take abs(det) again: +2% instructions on AVX2).
   M valid;
   if constexpr (kHasMaskRegisters<Arch>)
     valid = finite_nonzero<Arch>(det);

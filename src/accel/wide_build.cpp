@@ -1,14 +1,14 @@
 // Collapse of the binary BVH into the wide BVH, and leaf packing (wide_build.h).
 #include "accel/wide_build.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "simd/block_build.h"
 
@@ -80,100 +80,90 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
     return r;
   };
 
-  if (bvh.nodes[0].is_leaf()) {
-    // A lone leaf still has its box tested, in a node of one child, as the oracle's binary
-    // BVH tests its root box: both Accels then cull the same rays (an ill-conditioned
-    // Moller "hit" far outside the triangle's box is dropped by both).
-    root = 0;
-    simd::WideNode<N> node = inert_node();
-    const core::BvhNode& leaf = bvh.nodes[0];
-    if (!leaf.box.empty()) {
-      for (int a = 0; a < 3; ++a) {
-        node.bounds[2 * a][0] = leaf.box.lo[a];
-        node.bounds[2 * a + 1][0] = leaf.box.hi[a];
-      }
-      node.child[0] = leaf_ref(0, 1);
-      children = 1;
-    }
-    node_area = leaf.box.half_area();
-    nodes.push_back(node);
-  } else {
-    root = 0;
-    nodes.push_back(inert_node());
-    std::vector<Pending> stack{{0, 0, 0}};
-    while (!stack.empty()) {
-      const Pending p = stack.back();
-      stack.pop_back();
-      node_area += bvh.nodes[p.binary].box.half_area();
-      // Open the interior child of largest area until N children or only leaves.
-      std::uint32_t kids[N];
-      int n = 2;
+  // A lone leaf root still gets a node (of one child, itself): its box is then tested, as
+  // the oracle's binary BVH tests its root box, and both Accels cull the same rays (an
+  // ill-conditioned Moller "hit" far outside the triangle's box is dropped by both).
+  root = 0;
+  nodes.push_back(inert_node());
+  std::vector<Pending> stack{{0, 0, 0}};
+  while (!stack.empty()) {
+    const Pending p = stack.back();
+    stack.pop_back();
+    node_area += bvh.nodes[p.binary].box.half_area();
+    // Open the interior child of largest area until N children or only leaves.
+    std::uint32_t kids[N];
+    int n = 2;
+    if (bvh.nodes[p.binary].is_leaf()) {  // only the root: a lone leaf
+      kids[0] = p.binary;
+      n = 1;
+    } else {
       kids[0] = bvh.nodes[p.binary].first_or_child;
       kids[1] = kids[0] + 1;
-      while (n < N) {
-        int best = -1;
-        float best_area = -1.0f;
-        for (int k = 0; k < n; ++k) {
-          const core::BvhNode& c = bvh.nodes[kids[k]];
-          if (c.is_leaf()) continue;
-          const float area = c.box.half_area();
-          if (area > best_area) {
-            best_area = area;
-            best = k;
-          }
-        }
-        if (best < 0) break;
-        const std::uint32_t opened = bvh.nodes[kids[best]].first_or_child;
-        kids[best] = opened;
-        kids[n++] = opened + 1;
-      }
-      // Fill the node: boxes bit for bit, leaves referenced, interior children allocated
-      // side by side and queued (the first child on top, so it is laid out next).
-      simd::WideNode<N> node = inert_node();
-      int used = 0;
-      Pending queued[N];
-      int nqueued = 0;
+    }
+    while (n < N) {
+      int best = -1;
+      float best_area = -1.0f;
       for (int k = 0; k < n; ++k) {
         const core::BvhNode& c = bvh.nodes[kids[k]];
-        if (c.box.empty()) continue;
-        for (int a = 0; a < 3; ++a) {
-          node.bounds[2 * a][used] = c.box.lo[a];
-          node.bounds[2 * a + 1][used] = c.box.hi[a];
+        if (c.is_leaf()) continue;
+        const float area = c.box.half_area();
+        if (area > best_area) {
+          best_area = area;
+          best = k;
         }
-        if (c.is_leaf()) {
-          node.child[used] = leaf_ref(kids[k], p.depth + 1);
-        } else {
-          const std::uint32_t w = static_cast<std::uint32_t>(nodes.size());
-          if (w & ref::kLeafBit) throw std::length_error("wide BVH: more than 2^31 nodes");
-          nodes.push_back(inert_node());
-          node.child[used] = w;
-          queued[nqueued++] = {kids[k], w, p.depth + 1};
-        }
-        ++used;
       }
-      children += static_cast<std::size_t>(used);
-      nodes[p.wide] = node;
-      for (int q = nqueued - 1; q >= 0; --q) stack.push_back(queued[q]);
+      if (best < 0) break;
+      const std::uint32_t opened = bvh.nodes[kids[best]].first_or_child;
+      kids[best] = opened;
+      kids[n++] = opened + 1;
     }
+    // Fill the node: boxes bit for bit, leaves referenced, interior children allocated
+    // side by side and queued (the first child on top, so it is laid out next).
+    simd::WideNode<N> node = inert_node();
+    int used = 0;
+    Pending queued[N];
+    int nqueued = 0;
+    for (int k = 0; k < n; ++k) {
+      const core::BvhNode& c = bvh.nodes[kids[k]];
+      if (c.box.empty()) continue;
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[2 * a][used] = c.box.lo[a];
+        node.bounds[2 * a + 1][used] = c.box.hi[a];
+      }
+      if (c.is_leaf()) {
+        node.child[used] = leaf_ref(kids[k], p.depth + 1);
+      } else {
+        const std::uint32_t w = static_cast<std::uint32_t>(nodes.size());
+        if (w & ref::kLeafBit) throw std::length_error("wide BVH: more than 2^31 nodes");
+        nodes.push_back(inert_node());
+        node.child[used] = w;
+        queued[nqueued++] = {kids[k], w, p.depth + 1};
+      }
+      ++used;
+    }
+    children += static_cast<std::size_t>(used);
+    nodes[p.wide] = node;
+    for (int q = nqueued - 1; q >= 0; --q) stack.push_back(queued[q]);
   }
 
   // Pack every leaf's triangles into its blocks, leaves in parallel.
   blocks.resize(total_blocks);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<float> tri_xyz;
-    std::vector<std::uint32_t> tri_ids;
-    for (std::size_t l = r.begin(); l < r.end(); ++l) {
-      const core::BvhNode& leaf = bvh.nodes[leaves[l].binary];
-      tri_xyz.resize(9 * std::size_t{leaf.count});
-      tri_ids.resize(leaf.count);
-      for (std::uint32_t i = 0; i < leaf.count; ++i) {
-        const std::uint32_t prim = bvh.prim_index[leaf.first_or_child + i];
-        std::copy_n(xyz + 9 * std::size_t{prim}, 9, tri_xyz.data() + 9 * std::size_t{i});
-        tri_ids[i] = ids[prim];
-      }
-      simd::pack_blocks<Test, W>(tri_xyz.data(), tri_ids.data(), leaf.count, blocks.data() + leaves[l].first_block);
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, leaves.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<float> tri_xyz;
+        std::vector<std::uint32_t> tri_ids;
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+          const core::BvhNode& leaf = bvh.nodes[leaves[l].binary];
+          tri_xyz.resize(9 * std::size_t{leaf.count});
+          tri_ids.resize(leaf.count);
+          for (std::uint32_t i = 0; i < leaf.count; ++i) {
+            const std::uint32_t prim = bvh.prim_index[leaf.first_or_child + i];
+            std::copy_n(xyz + 9 * std::size_t{prim}, 9, tri_xyz.data() + 9 * std::size_t{i});
+            tri_ids[i] = ids[prim];
+          }
+          simd::pack_blocks<Test, W>(tri_xyz.data(), tri_ids.data(), leaf.count, blocks.data() + leaves[l].first_block);
+        }
+      });
 
   const double root_area = bvh.nodes[0].box.half_area();
   stats.nodes = nodes.size();

@@ -13,6 +13,7 @@ struct Config {
   Isa isa = Isa::scalar;
   Mode mode = Mode::single;
   bool robust = true;  ///< Options::robust: padded, NaN-safe slab test
+  bool operator==(const Config&) const = default;
 };
 
 /// "watertight avx2 packet16 robust" (or "plain" for robust = false).

@@ -45,8 +45,7 @@ std::vector<CaseKey> case_keys(const std::vector<Row>& rows, const std::string& 
 
 const Row* find_row(const std::vector<Row>& rows, const Config& c, const CaseKey& k) {
   for (const Row& r : rows)
-    if (r.set == k.set && r.name == k.name && r.offset == k.offset && r.config.test == c.test &&
-        r.config.isa == c.isa && r.config.mode == c.mode && r.config.robust == c.robust)
+    if (r.set == k.set && r.name == k.name && r.offset == k.offset && r.config == c)
       return &r;
   return nullptr;
 }

@@ -1,8 +1,9 @@
 #include "accuracy/spawn_check.h"
 
 #include <cmath>
-#include <glm/glm.hpp>
 #include <random>
+
+#include <glm/glm.hpp>
 
 #include "render/spawn.h"
 #include "volley/accel.h"
@@ -35,11 +36,8 @@ SpawnRow spawn_check(float scale, std::size_t count, Isa isa, std::uint64_t seed
     const Hit hit = accel.intersect(ray);
     if (!hit.hit()) continue;
     // The hit point and its error bound as the renderer computes them (Scene::surface_as).
-    const float b0 = 1.0f - hit.u - hit.v;
-    const glm::vec3 p = b0 * p0 + hit.u * p1 + hit.v * p2;
-    glm::vec3 err = render::gamma(7) * (glm::abs(b0 * p0) + glm::abs(hit.u * p1) + glm::abs(hit.v * p2));
-    const glm::vec3 reach = glm::max(glm::abs(p0 - p), glm::max(glm::abs(p1 - p), glm::abs(p2 - p)));
-    err += glm::vec3(render::gamma(8) * std::max(reach.x, std::max(reach.y, reach.z)));
+    glm::vec3 err;
+    const glm::vec3 p = render::hit_point(p0, p1, p2, hit.u, hit.v, err);
     const glm::vec3 ng = glm::dot(n, glm::vec3(ray.dir[0], ray.dir[1], ray.dir[2])) < 0 ? n : -n;
     // A random direction on either side.
     const glm::vec3 w(uni(rng) - 0.5f, uni(rng) - 0.5f, uni(rng) - 0.5f);

@@ -6,14 +6,6 @@
 #include "accuracy/report.h"
 
 namespace volley::accuracy {
-namespace {
-
-bool same(const Config& a, const Config& b) {
-  return a.test == b.test && a.isa == b.isa && a.mode == b.mode && a.robust == b.robust;
-}
-
-}  // namespace
-
 std::string speed_basis(const std::vector<Row>& rows) {
   const bool scenes = std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.set == "scene"; });
   return scenes ? "the shared-mesh cases (primary and random rays)" : "all cases (no shared meshes)";
@@ -23,7 +15,7 @@ std::vector<ConfigSummary> summarize(const std::vector<Row>& rows) {
   const bool scenes = std::any_of(rows.begin(), rows.end(), [](const Row& r) { return r.set == "scene"; });
   std::vector<ConfigSummary> out;
   for (const Row& r : rows) {
-    auto it = std::find_if(out.begin(), out.end(), [&](const ConfigSummary& s) { return same(s.config, r.config); });
+    auto it = std::find_if(out.begin(), out.end(), [&](const ConfigSummary& s) { return s.config == r.config; });
     if (it == out.end()) {
       out.push_back({});
       out.back().config = r.config;

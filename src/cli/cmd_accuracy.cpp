@@ -83,12 +83,7 @@ std::vector<Isa> chosen_isas(const AccuracyArgs& a) {
 /// directory when it holds scenes/, else two levels above the executable (build/<dir>/volley).
 fs::path project_root() {
   if (fs::exists(fs::path("scenes") / "cornell.json")) return fs::current_path();
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const fs::path root = exe.parent_path().parent_path().parent_path();
-    if (fs::exists(root / "scenes" / "cornell.json")) return root;
-  }
+  if (const auto root = project_dir_of_executable(); root && fs::exists(*root / "scenes" / "cornell.json")) return *root;
   return fs::current_path();
 }
 
@@ -251,7 +246,8 @@ Runner register_accuracy(CLI::App& app) {
 
     std::size_t rays = 0, wt_leaks = 0, nan = 0;
     double worst_median = 0;
-    for (const acc::ConfigSummary& s : acc::summarize(report.rows)) {
+    const std::vector<acc::ConfigSummary> summaries = acc::summarize(report.rows);
+    for (const acc::ConfigSummary& s : summaries) {
       rays += s.rays, nan += s.nan;
       if (s.config.test == TriangleTest::watertight && s.config.robust) wt_leaks += s.leaks;
       worst_median = std::max(worst_median, s.worst_t_median);
@@ -259,7 +255,7 @@ Runner register_accuracy(CLI::App& app) {
     std::printf(
         "accuracy: %zu configurations x %zu cases, %zu rays, watertight+robust leaks %zu, worst t error "
         "median %.3g, NaN %zu, %zu renders, in %.0f s -> %s/{report.md,accuracy.csv%s}\n",
-        acc::summarize(report.rows).size(), cases.size(), rays, wt_leaks, worst_median, nan, report.images.size(),
+        summaries.size(), cases.size(), rays, wt_leaks, worst_median, nan, report.images.size(),
         report.seconds, out.string().c_str(), plotted ? ",accuracy.png" : "");
     return 0;
   };

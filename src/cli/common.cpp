@@ -3,8 +3,6 @@
 #include <cstdlib>
 #include <vector>
 
-#include <unistd.h>
-
 #include "volley/accel.h"
 
 namespace volley::cli {
@@ -23,8 +21,9 @@ void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
                "The accuracy reference: the scalar oracle with the triangle test in double precision and "
                "robust box tests (implies --isa scalar)")
       ->excludes(fast);
-  cmd.add_option("--scenes", args.scenes,
-                 "Folder of shared benchmark meshes (${scenes}/ in scene files); default $VOLLEY_SCENES or ../shared/scenes");
+  cmd.add_option(
+      "--scenes", args.scenes,
+      "Folder of shared benchmark meshes (${scenes}/ in scene files); default $VOLLEY_SCENES or ../shared/scenes");
 }
 
 Options kernel_options(const KernelArgs& args) {
@@ -35,9 +34,18 @@ Options kernel_options(const KernelArgs& args) {
   o.reference_double = args.reference;
   if (args.reference && o.isa == Isa::automatic) o.isa = Isa::scalar;
   if (args.reference && o.isa != Isa::scalar)
-    throw Error("--reference runs the scalar oracle in double precision: use it without --isa (or with --isa "
-                "scalar), not with --isa " + args.isa);
+    throw Error(
+        "--reference runs the scalar oracle in double precision: use it without --isa (or with --isa "
+        "scalar), not with --isa " +
+        args.isa);
   return o;
+}
+
+std::optional<std::filesystem::path> project_dir_of_executable() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return std::nullopt;
+  return exe.parent_path().parent_path().parent_path();  // <project>/build/<dir>/volley
 }
 
 std::filesystem::path shared_scenes_dir(const std::string& flag) {
@@ -45,13 +53,7 @@ std::filesystem::path shared_scenes_dir(const std::string& flag) {
   if (!flag.empty()) return flag;
   if (const char* env = std::getenv("VOLLEY_SCENES"); env && *env) return env;
   std::vector<fs::path> candidates = {fs::current_path() / ".." / "shared" / "scenes"};
-  char exe[4096];
-  const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-  if (n > 0) {
-    exe[n] = '\0';
-    // build/release/volley -> <project>/../shared/scenes
-    candidates.push_back(fs::path(exe).parent_path() / ".." / ".." / ".." / "shared" / "scenes");
-  }
+  if (const auto project = project_dir_of_executable()) candidates.push_back(*project / ".." / "shared" / "scenes");
   for (const auto& c : candidates)
     if (fs::is_directory(c)) return fs::weakly_canonical(c);
   return candidates.front();

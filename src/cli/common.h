@@ -1,9 +1,9 @@
 // Pieces shared by the volley subcommands.
 #pragma once
-#include <filesystem>
-#include <string>
-
 #include <CLI/CLI.hpp>
+#include <filesystem>
+#include <optional>
+#include <string>
 
 #include "volley/options.h"
 
@@ -28,5 +28,9 @@ Options kernel_options(const KernelArgs& args);
 /// Where ${scenes}/ points: --scenes, else VOLLEY_SCENES, else ../shared/scenes beside the
 /// project (found from the working directory or from the executable's location).
 std::filesystem::path shared_scenes_dir(const std::string& flag);
+
+/// The project folder of a volley built in <project>/build/<dir>/ (from /proc/self/exe);
+/// nothing when the executable's path cannot be read.
+std::optional<std::filesystem::path> project_dir_of_executable();
 
 }  // namespace volley::cli

@@ -328,11 +328,12 @@ class Splitter {
   }
 
   void bin(const Task& t, const BinGrid& grid, bool parallel) {
-    bins_.clear(grid.nb);
-    if (!parallel) return bins_.add(items_, t.begin, t.end, grid);
+    if (!parallel) {
+      bins_.clear(grid.nb);
+      return bins_.add(items_, t.begin, t.end, grid);
+    }
     // Fixed chunks joined in a fixed order: the same bins for any number of threads.
-    Bins empty(opt_.bins);
-    empty.clear(grid.nb);
+    const Bins empty(opt_.bins);  // constructed cleared
     bins_ = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::uint32_t>(t.begin, t.end, kBinChunk), empty,
         [&](const tbb::blocked_range<std::uint32_t>& r, Bins acc) {

@@ -104,18 +104,11 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
   if (hit.prim < tri_count) {
     const std::uint32_t* idx = &indices_[3 * hit.prim];
     const glm::vec3 &p0 = positions_[idx[0]], &p1 = positions_[idx[1]], &p2 = positions_[idx[2]];
-    const float b0 = 1.0f - hit.u - hit.v;
-    // Hit point from barycentrics, with pbrt's error bound (Pharr et al., 4th ed., 6.8).
-    s.p = b0 * p0 + hit.u * p1 + hit.v * p2;
-    s.p_error = gamma(7) * (glm::abs(b0 * p0) + glm::abs(hit.u * p1) + glm::abs(hit.v * p2));
-    // A ray leaving p tests this triangle with its vertices taken relative to the new
-    // origin: the test's own rounding grows with the farthest vertex (a wall 500 units
-    // long re-hit at t = -0 from 7e-5 off its plane without this term).
-    const glm::vec3 reach = glm::max(glm::abs(p0 - s.p), glm::max(glm::abs(p1 - s.p), glm::abs(p2 - s.p)));
-    s.p_error += glm::vec3(gamma(8) * std::max(reach.x, std::max(reach.y, reach.z)));
+    s.p = hit_point(p0, p1, p2, hit.u, hit.v, s.p_error);
     s.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
     if (Smooth && !corner_normals_.empty()) {
       const glm::vec3* n = &corner_normals_[3 * hit.prim];
+      const float b0 = 1.0f - hit.u - hit.v;
       s.ns = b0 * n[0] + hit.u * n[1] + hit.v * n[2];
       const float len = glm::length(s.ns);
       s.ns = len > 0.0f ? s.ns / len : s.ng;

@@ -130,7 +130,7 @@ void shade_batch(const Scene& scene, unsigned stages, ShadeFn one, ContinueFn th
     Lanes3 point, point_error, normal, view_dir;
     std::uint32_t front_bits = 0;
     if (batch != 0) {
-      // Scene::surface_as<false>.
+      // render::hit_point and the normal of Scene::surface_as<false>.
       const V3 a = p0.load(), b = p1.load(), c = p2.load();
       const B bu = u.load(), bv = v.load();
       const B b0 = B(1.0f) - bu - bv;

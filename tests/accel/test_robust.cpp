@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accel_test_util.h"
+#include "accuracy/query_modes.h"
 
 using namespace accel_test;
 using volley::Options;
@@ -28,34 +29,19 @@ struct Answers {
 };
 
 Answers answers(const Accel& accel, const std::vector<Ray>& rays) {
+  namespace acc = volley::accuracy;
   Answers a;
-  a.packet.resize(rays.size());
-  a.stream.resize(rays.size());
-  a.occluded.resize(rays.size());
-  for (const Ray& r : rays) a.single.push_back(accel.intersect(r));
-  for (std::size_t first = 0; first < rays.size(); first += 16) {
-    const int n = static_cast<int>(std::min<std::size_t>(16, rays.size() - first));
-    volley::RayPacket<16> p;
-    volley::HitPacket<16> h;
-    volley::load(p, rays.data() + first, n);
-    volley::reset(h);
-    accel.intersect(p, h);
-    volley::store(h, a.packet.data() + first, n);
-  }
-  accel.intersect(rays.data(), rays.size(), a.stream.data());
-  accel.occluded(rays.data(), rays.size(), a.occluded.data());
+  acc::intersect(accel, rays, acc::Mode::single, a.single);
+  acc::intersect(accel, rays, acc::Mode::packet16, a.packet);
+  acc::Answers stream = acc::trace(accel, rays, acc::Mode::stream);
+  a.stream = std::move(stream.hits);
+  a.occluded = std::move(stream.occluded);
   return a;
 }
 
 /// The same answer bit for bit: prim, t, u, v.
 bool same(const Hit& a, const Hit& b) {
   return a.prim == b.prim && (!a.hit() || (a.t == b.t && a.u == b.u && a.v == b.v));
-}
-
-std::vector<Isa> all_isas() {
-  std::vector<Isa> isas = simd_isas();
-  isas.insert(isas.begin(), Isa::scalar);
-  return isas;
 }
 
 }  // namespace
@@ -68,7 +54,7 @@ TEST_CASE("robust: fast slabs give the robust answers on ordinary rays (every te
   const Soup soup = random_soup(1500, 31);
   const std::vector<Ray> rays = mixed_rays(120, 10.0f, 7);
   for (TriangleTest test : kTests) {
-    for (Isa isa : all_isas()) {
+    for (Isa isa : volley::accuracy::available_isas()) {
       CAPTURE(name(test, isa, false));
       const Answers robust = answers(soup.accel(Options{test, isa, true}), rays);
       const Answers fast = answers(soup.accel(Options{test, isa, false}), rays);
@@ -98,9 +84,8 @@ TEST_CASE("robust: rays aimed at the vertices of lone triangles miss some withou
   const VertexAimed case_ = lone_triangles_vertex_aimed();
   const Soup& soup = case_.soup;
   const std::vector<Ray>& rays = case_.rays;
-  std::vector<Hit> want(rays.size());
-  for (std::size_t i = 0; i < rays.size(); ++i) want[i] = brute_force(soup, TriangleTest::watertight, rays[i]);
-  for (Isa isa : all_isas()) {
+  const std::vector<Hit> want = brute_force_all(soup, TriangleTest::watertight, rays);
+  for (Isa isa : volley::accuracy::available_isas()) {
     std::size_t wrong[2] = {0, 0};
     for (bool robust : {false, true}) {
       const Accel accel = soup.accel(Options{TriangleTest::watertight, isa, robust});
@@ -116,7 +101,7 @@ TEST_CASE("robust: rays aimed at the vertices of lone triangles miss some withou
 
 TEST_CASE("robust: AccelInfo reports the traversal options") {
   const Soup soup = random_soup(50, 4);
-  for (Isa isa : all_isas())
+  for (Isa isa : volley::accuracy::available_isas())
     for (bool robust : {true, false}) {
       const volley::AccelInfo info = soup.accel(Options{TriangleTest::moller, isa, robust}).info();
       CHECK(info.robust == robust);

@@ -142,8 +142,7 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   const volley::core::Bvh bvh = volley::core::build_bvh(boxes, one_per_leaf);
   std::vector<std::uint32_t> ids(soup.size());
   for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
-  std::vector<Hit> want(rays.size());
-  for (std::size_t i = 0; i < rays.size(); ++i) want[i] = brute_force(soup, TriangleTest::watertight, rays[i]);
+  const std::vector<Hit> want = brute_force_all(soup, TriangleTest::watertight, rays);
   for (Isa isa : simd_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     std::size_t missed[2] = {0, 0}, packet_missed[2] = {0, 0};
