@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <utility>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -42,6 +44,120 @@ simd::WideNode<N> inert_node() {
   }
   return node;
 }
+
+
+// The SAH-optimal collapse of Ylitie, Karras and Laine, "Efficient incoherent ray traversal
+// on GPUs through compressed wide BVHs" (HPG 2017), with the binary leaves kept as they
+// are: a wide node for binary node n gets the forest of at most N subtrees below n whose
+// own wide nodes have the least total area. Leaves are fixed, so their cost is the same in
+// every collapse and the SAH cost of the wide BVH is sum A(wide node) + the leaves' term.
+// Dynamic programming over the binary tree, children before parents:
+//   forest(n, 1) = A(n) + split(n, N) for interior n (n becomes a wide node), 0 for a leaf;
+//   forest(n, i) = min(forest(n, 1), split(n, i)), i = 2 .. N (n opened into i slots);
+//   split(n, i)  = min over j of forest(left, j) + forest(right, i - j).
+// A child with an empty box (the builder's subtree of degenerate triangles, which no ray can
+// hit) takes no slot and costs nothing.
+class CollapsePlan {
+ public:
+  explicit CollapsePlan(const core::Bvh& bvh) : bvh_(bvh), cost_(bvh.nodes.size()), choice_(bvh.nodes.size()), split_(bvh.nodes.size()) {
+    // Post order with an explicit stack (no recursion: a binary BVH may be 64 deep).
+    std::vector<std::pair<std::uint32_t, bool>> stack{{0u, false}};
+    while (!stack.empty()) {
+      const auto [n, expanded] = stack.back();
+      stack.pop_back();
+      const core::BvhNode& node = bvh.nodes[n];
+      if (!node.is_leaf() && !expanded) {
+        stack.push_back({n, true});
+        stack.push_back({node.first_or_child, false});
+        stack.push_back({node.first_or_child + 1, false});
+        continue;
+      }
+      solve(n);
+    }
+  }
+
+  /// The binary nodes that become the children of the wide node for interior node n, in
+  /// binary-tree order (left subtree first). Empty boxes left out.
+  void children(std::uint32_t n, std::vector<std::uint32_t>& out) const { collect_split(n, N, out); }
+
+ private:
+  // cost_[n][i - 1] = forest(n, i); choice_[n][i - 1] (i >= 2): 0 = n as one slot, 1 = opened;
+  // split_[n][i - 1] = the left child's slots in split(n, i) (the right child gets the rest).
+  void solve(std::uint32_t n) {
+    const core::BvhNode& node = bvh_.nodes[n];
+    auto& cost = cost_[n];
+    auto& choice = choice_[n];
+    if (node.is_leaf()) {
+      cost.fill(0.0);
+      choice.fill(0);
+      return;
+    }
+    const std::uint32_t l = node.first_or_child, r = l + 1;
+    const bool lempty = bvh_.nodes[l].box.empty(), rempty = bvh_.nodes[r].box.empty();
+    // split(n, i) for i = 1 .. N, with the left child's slot count behind it.
+    std::array<double, N> split;
+    std::array<std::uint8_t, N> split_left;
+    for (int i = 1; i <= N; ++i) {
+      double best = kInfD;
+      int best_j = 0;
+      if (lempty || rempty) {
+        // One child is empty: all i slots go to the other (j = i: left, j = 0 encoded as
+        // N + 1 means right; both empty cannot happen below a non-empty root).
+        if (lempty && rempty) {
+          best = 0.0, best_j = 0;
+        } else if (rempty) {
+          best = cost_[l][i - 1], best_j = i;
+        } else {
+          best = cost_[r][i - 1], best_j = 0;
+        }
+      } else {
+        for (int j = 1; j < i; ++j) {
+          const double c = cost_[l][j - 1] + cost_[r][i - j - 1];
+          if (c < best) best = c, best_j = j;
+        }
+      }
+      split[i - 1] = best;
+      split_left[i - 1] = static_cast<std::uint8_t>(best_j);
+    }
+    split_[n] = split_left;
+    const double as_node = node.box.half_area() + split[N - 1];
+    cost[0] = as_node;
+    choice[0] = 0;
+    for (int i = 2; i <= N; ++i) {
+      if (split[i - 1] < as_node) {
+        cost[i - 1] = split[i - 1];
+        choice[i - 1] = 1;
+      } else {
+        cost[i - 1] = as_node;
+        choice[i - 1] = 0;
+      }
+    }
+  }
+
+  // n's subtree as at most i slots.
+  void collect(std::uint32_t n, int i, std::vector<std::uint32_t>& out) const {
+    if (bvh_.nodes[n].box.empty()) return;
+    if (bvh_.nodes[n].is_leaf() || i == 1 || choice_[n][i - 1] == 0) {
+      out.push_back(n);
+      return;
+    }
+    collect_split(n, i, out);
+  }
+
+  // n's two children as at most i slots.
+  void collect_split(std::uint32_t n, int i, std::vector<std::uint32_t>& out) const {
+    const std::uint32_t l = bvh_.nodes[n].first_or_child;
+    const int j = split_[n][i - 1];
+    if (j > 0) collect(l, j, out);
+    if (i - j > 0) collect(l + 1, i - j, out);
+  }
+
+  static constexpr double kInfD = std::numeric_limits<double>::infinity();
+  const core::Bvh& bvh_;
+  std::vector<std::array<double, N>> cost_;
+  std::vector<std::array<std::uint8_t, N>> choice_;
+  std::vector<std::array<std::uint8_t, N>> split_;
+};
 
 }  // namespace
 
@@ -83,61 +199,40 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
   // A lone leaf root still gets a node (of one child, itself): its box is then tested, as
   // the oracle's binary BVH tests its root box, and both Accels cull the same rays (an
   // ill-conditioned Moller "hit" far outside the triangle's box is dropped by both).
+  const CollapsePlan plan(bvh);
   root = 0;
   nodes.push_back(inert_node());
   std::vector<Pending> stack{{0, 0, 0}};
+  std::vector<std::uint32_t> kids;
   while (!stack.empty()) {
     const Pending p = stack.back();
     stack.pop_back();
     node_area += bvh.nodes[p.binary].box.half_area();
-    // Open the interior child of largest area until N children or only leaves.
-    std::uint32_t kids[N];
-    int n = 2;
-    if (bvh.nodes[p.binary].is_leaf()) {  // only the root: a lone leaf
-      kids[0] = p.binary;
-      n = 1;
-    } else {
-      kids[0] = bvh.nodes[p.binary].first_or_child;
-      kids[1] = kids[0] + 1;
-    }
-    while (n < N) {
-      int best = -1;
-      float best_area = -1.0f;
-      for (int k = 0; k < n; ++k) {
-        const core::BvhNode& c = bvh.nodes[kids[k]];
-        if (c.is_leaf()) continue;
-        const float area = c.box.half_area();
-        if (area > best_area) {
-          best_area = area;
-          best = k;
-        }
-      }
-      if (best < 0) break;
-      const std::uint32_t opened = bvh.nodes[kids[best]].first_or_child;
-      kids[best] = opened;
-      kids[n++] = opened + 1;
-    }
+    kids.clear();
+    if (bvh.nodes[p.binary].is_leaf())  // only the root: a lone leaf
+      kids.push_back(p.binary);
+    else
+      plan.children(p.binary, kids);
     // Fill the node: boxes bit for bit, leaves referenced, interior children allocated
     // side by side and queued (the first child on top, so it is laid out next).
     simd::WideNode<N> node = inert_node();
     int used = 0;
     Pending queued[N];
     int nqueued = 0;
-    for (int k = 0; k < n; ++k) {
-      const core::BvhNode& c = bvh.nodes[kids[k]];
-      if (c.box.empty()) continue;
+    for (const std::uint32_t kid : kids) {
+      const core::BvhNode& c = bvh.nodes[kid];
       for (int a = 0; a < 3; ++a) {
         node.bounds[2 * a][used] = c.box.lo[a];
         node.bounds[2 * a + 1][used] = c.box.hi[a];
       }
       if (c.is_leaf()) {
-        node.child[used] = leaf_ref(kids[k], p.depth + 1);
+        node.child[used] = leaf_ref(kid, p.depth + 1);
       } else {
         const std::uint32_t w = static_cast<std::uint32_t>(nodes.size());
         if (w & ref::kLeafBit) throw std::length_error("wide BVH: more than 2^31 nodes");
         nodes.push_back(inert_node());
         node.child[used] = w;
-        queued[nqueued++] = {kids[k], w, p.depth + 1};
+        queued[nqueued++] = {kid, w, p.depth + 1};
       }
       ++used;
     }

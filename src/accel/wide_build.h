@@ -14,11 +14,13 @@ namespace volley::accel {
 /// Collapses `bvh` (binary, over triangles numbered as its prim_index) into kWideN-wide
 /// nodes and packs each of its leaves into blocks of W triangles (simd::pack_blocks).
 ///
-/// Collapse (as Embree's BVH8 builder): a wide node starts with the two children of a binary
-/// node and repeatedly replaces its interior child of largest surface area by that child's
-/// two children, until it has kWideN children or only leaves. Children with an empty box
-/// (the builder's subtree of degenerate triangles, which no ray can hit) are left out, the
-/// others keep the binary node's box bit for bit (so the slab tests agree with the oracle's).
+/// Collapse: SAH-optimal over the binary tree's nodes (Ylitie, Karras, Laine 2017, with the
+/// binary leaves kept): each wide node gets the forest of at most kWideN subtrees below its
+/// binary node that minimises the summed surface area of the wide nodes. Children with an
+/// empty box (the builder's subtree of degenerate triangles, which no ray can hit) are left
+/// out, the others keep the binary node's box bit for bit (so the slab tests agree with the
+/// oracle's). Against the greedy collapse (open the largest child until N), Sponza: 1765 ->
+/// 1231 nodes, 4.3 -> 5.7 children each, 2% fewer instructions per diffuse ray (conference 7%).
 /// Interior children of a node are allocated next to each other, depth first; leaves' blocks
 /// in the order the collapse meets them. Unused child slots are inert.
 ///
