@@ -260,15 +260,21 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
                                                    Hit& hit) {
   const Ray& ray = pr.ray;
   if (start == wide_ref::kEmptyRef) return false;
-  // Rejected as by the oracle: non-finite origin or direction, NaN interval ends.
-  for (int a = 0; a < 3; ++a)
-    if (!std::isfinite(ray.org[a]) || !std::isfinite(ray.dir[a])) return false;
-  if (std::isnan(ray.tmin) || std::isnan(ray.tmax)) return false;
-  // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component.
-  float inv[3];
-  for (int a = 0; a < 3; ++a) inv[a] = 1.0f / ray.dir[a];
-  if (ray.dir[0] != 0.0f && ray.dir[1] != 0.0f && ray.dir[2] != 0.0f)
-    return walk<AnyHit, true>(bvh, pr, inv, start, hit);
+  // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
+  // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
+  // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
+  const __m128 org_tmin = _mm_loadu_ps(ray.org), dir_tmax = _mm_loadu_ps(ray.dir);
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 ok_o = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero),
+                                   _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
+  const __m128 ok_d = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(dir_tmax, dir_tmax), zero),
+                                   _mm_cmpord_ps(dir_tmax, dir_tmax), 0b1000);
+  if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return false;
+  // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
+  // for the three; lane 3 is 1 / tmax, unused).
+  alignas(16) float inv[4];
+  _mm_store_ps(inv, _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax));
+  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
   return walk<AnyHit, false>(bvh, pr, inv, start, hit);
 }
 

@@ -225,6 +225,15 @@ bool Accel::Impl::trace_polygons_as(const core::RayT<float>& r, Hit& hit) const 
 
 template <bool AnyHit>
 bool Accel::Impl::trace(const Ray& ray, Hit& hit) const {
+  // Triangles only on the wide BVH (the common case): straight to its kernels.
+  if (wide && polygon_bvh.nodes.empty()) {
+    if constexpr (AnyHit) {
+      return wide->occluded(ray);
+    } else {
+      wide->intersect(ray, hit);
+      return hit.hit();
+    }
+  }
   core::RayT<float> r = to_core(ray);
   bool found = false;
   if (wide) {
