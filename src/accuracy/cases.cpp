@@ -89,9 +89,11 @@ std::vector<Case> random_triangle_cases(std::size_t rays) {
   return out;
 }
 
-std::vector<Case> scene_cases(const std::filesystem::path& scenes_dir, int size, std::vector<std::string>& missing) {
+std::vector<Case> scene_cases(const std::filesystem::path& scenes_dir, int size, std::vector<std::string>& missing,
+                              std::size_t max_meshes) {
   std::vector<Case> out;
   for (const char* file : kSceneMeshes) {
+    if (out.size() >= 2 * max_meshes) break;
     const std::filesystem::path path = scenes_dir / file;
     if (!std::filesystem::exists(path)) {
       missing.push_back(path.string());

@@ -39,7 +39,8 @@ inline const char* const kSceneMeshes[] = {"stanford-bunny.obj", "dragon_100k.ob
 /// For each of kSceneMeshes found: "<mesh>/primary" (one camera ray per pixel of a
 /// `size` x `size` image, automatic camera, 4x4 blocks) and "<mesh>/random" (size^2 rays
 /// from its bounding box, enlarged, aimed at random interior points of random triangles).
-/// `missing` receives the files not found.
-std::vector<Case> scene_cases(const std::filesystem::path& scenes_dir, int size, std::vector<std::string>& missing);
+/// `missing` receives the files not found. At most `max_meshes` meshes are loaded.
+std::vector<Case> scene_cases(const std::filesystem::path& scenes_dir, int size, std::vector<std::string>& missing,
+                              std::size_t max_meshes = std::size(kSceneMeshes));
 
 }  // namespace volley::accuracy

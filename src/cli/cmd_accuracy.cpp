@@ -95,7 +95,8 @@ std::vector<acc::Case> gather_cases(const AccuracyArgs& a, const fs::path& scene
   std::vector<acc::Case> shared;
   if (fs::is_directory(scenes)) {
     std::vector<std::string> missing;
-    shared = acc::scene_cases(scenes, a.quick ? 32 : 256, missing);
+    // --quick: the first mesh found only (the dragon alone takes seconds to load).
+    shared = acc::scene_cases(scenes, a.quick ? 32 : 256, missing, a.quick ? 1 : std::size(acc::kSceneMeshes));
     for (const std::string& m : missing) report.notes.push_back("Shared mesh " + m + " not found: skipped.");
   } else {
     report.notes.push_back("Shared scenes folder " + scenes.string() + " not found: shared-mesh cases skipped.");
@@ -104,7 +105,6 @@ std::vector<acc::Case> gather_cases(const AccuracyArgs& a, const fs::path& scene
   if (a.quick) {  // one closed mesh at 0, the other at 1e6, one random set, one shared mesh
     cases = {std::move(cases.front()), std::move(cases.back())};
     random.resize(1);
-    if (shared.size() > 2) shared.resize(2);
   }
   for (auto* set : {&random, &shared})
     for (acc::Case& c : *set) cases.push_back(std::move(c));
