@@ -1,9 +1,12 @@
 // Binned SAH BVH builder (Wald 2007) and BVH statistics. See bvh.h for the contract.
 //
-// The two passes over a node's primitives (binning, partition) use SSE2/SSE4.1
-// intrinsics, part of the x86-64-v2 baseline every volley object is compiled for:
-// a box is two 4-lane registers (x, y, z and an unused 4th lane), extended with one
-// minps and one maxps. Everything else is plain scalar code.
+// The passes over a node's primitives (binning, partition, the first pass over the input
+// and the median split's bounds) and the sweep over the bins use SSE2/SSE4.1 intrinsics,
+// part of the x86-64-v2 baseline every volley object is compiled for: a box is two 4-lane
+// registers (x, y, z and a 4th lane: 0, or a bin's count), extended with one minps and one
+// maxps; the sweep prices the three axes in the lanes of one register. Each is written to
+// evaluate the float operations of the scalar formulation it replaced (BBox, one axis at
+// a time), so the tree is bit for bit the one those gave (perf/build.md).
 //
 // Parallel build (oneTBB): a node of at least kTaskNode primitives is split by the
 // top-level recursion, which builds its two children as parallel tasks (and bins the
@@ -40,6 +43,9 @@ constexpr std::uint32_t kTaskNode = 1u << 12;
 // Nodes with at least this many primitives are binned in parallel chunks of kBinChunk.
 constexpr std::uint32_t kParallelBinning = 1u << 15;
 constexpr std::size_t kBinChunk = 1u << 13;
+// Bin counts live in float lanes as subnormal patterns (empty_bin below): one add() call
+// must see fewer than 2^23 items.
+static_assert(kParallelBinning <= (1u << 23) && kBinChunk <= (1u << 23));
 
 // A primitive as the builder moves it around: its bounds and its id. The builder
 // partitions an array of these in place, so each pass reads memory sequentially
@@ -153,77 +159,93 @@ struct BinGrid {
   bool any_active() const { return active[0] || active[1] || active[2]; }
 };
 
-// Bounds and primitive counts of the bins of the three axes (axis a: bins [a * cap, a * cap + nb)),
-// plus a second set of the same shape that add() fills with every other primitive: two
-// independent read-modify-write chains, where one chain stalls on store forwarding
-// whenever neighbouring primitives (neighbours in a mesh) fall into the same bin.
+// A bin: the bounds of its primitives in lanes x, y, z of a Box4 and their count, as
+// integer bits, in lane 3 of hi. Items' hi has 0 in lane 3, and maxps keeps a positive
+// subnormal pattern against +0, so the count survives the bound update and one integer
+// add bumps it: no separate counter to load, increment and store per axis. Exact while a
+// count stays below 2^23 (a subnormal pattern): add() sees at most kParallelBinning items.
+inline Box4 empty_bin() {
+  Box4 b;
+  b.hi = _mm_and_ps(b.hi, xyz_mask());  // count 0
+  return b;
+}
+inline std::uint32_t bin_count(const Box4& b) {
+  return static_cast<std::uint32_t>(_mm_extract_epi32(_mm_castps_si128(b.hi), 3));
+}
+// Merges bin b into bin a: bounds extended, counts added.
+inline void merge_bin(Box4& a, const Box4& b) {
+  const __m128i counts = _mm_add_epi32(_mm_castps_si128(a.hi), _mm_castps_si128(b.hi));
+  a.lo = _mm_min_ps(a.lo, b.lo);
+  a.hi = _mm_blend_ps(_mm_max_ps(a.hi, b.hi), _mm_castsi128_ps(counts), 0b1000);
+}
+
+// The bins of the three axes (axis a: bins [a * cap, a * cap + nb)), plus a second set of
+// the same shape that add() fills with every other primitive: two independent
+// read-modify-write chains, where one chain stalls on store forwarding whenever
+// neighbouring primitives (neighbours in a mesh) fall into the same bin.
 struct Bins {
   int cap = 0;
-  std::vector<Box4> box;             // 2 sets x 3 axes x cap
-  std::vector<std::uint32_t> count;  // 2 sets x 3 axes x cap
+  std::vector<Box4> box;  // 2 sets x 3 axes x cap
 
-  explicit Bins(int capacity) : cap(capacity), box(6 * std::size_t(capacity)), count(6 * std::size_t(capacity)) {}
+  explicit Bins(int capacity) : cap(capacity), box(6 * std::size_t(capacity), empty_bin()) {}
   void clear(int nb, int set = 0) {
-    for (int a = 3 * set; a < 3 * set + 3; ++a) {
-      std::fill_n(&box[a * cap], nb, Box4{});
-      std::fill_n(&count[a * cap], nb, 0u);
-    }
+    for (int a = 3 * set; a < 3 * set + 3; ++a) std::fill_n(&box[a * cap], nb, empty_bin());
   }
+  const Box4& at(int axis, int b) const { return box[axis * cap + b]; }
   // Adds items [begin, end) on the three axes in one pass (Wald 2007, sec. 3), into set 0.
   void add(const Item* items, std::uint32_t begin, std::uint32_t end, const BinGrid& g) {
     // Below this many items clearing and folding the second set costs more than it saves.
     constexpr std::uint32_t kTwoSets = 64;
-    if (end - begin < kTwoSets) return add_to(0, items, begin, end, 1, g);
+    if (end - begin < kTwoSets) return add_to<1>(items, begin, end, g);
     clear(g.nb, 1);
-    add_to(0, items, begin, end, 2, g);
-    add_to(1, items, begin + 1, end, 2, g);
-    for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < g.nb; ++b) {
-        box[a * cap + b].extend(box[(a + 3) * cap + b]);
-        count[a * cap + b] += count[(a + 3) * cap + b];
-      }
-    }
+    add_to<2>(items, begin, end, g);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < g.nb; ++b) merge_bin(box[a * cap + b], box[(a + 3) * cap + b]);
   }
   void merge(const Bins& o, int nb) {
-    for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < nb; ++b) {
-        box[a * cap + b].extend(o.box[a * cap + b]);
-        count[a * cap + b] += o.count[a * cap + b];
-      }
-    }
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < nb; ++b) merge_bin(box[a * cap + b], o.box[a * cap + b]);
   }
 
  private:
-  // Adds items begin, begin + step, ... < end into `set`.
-  void add_to(int set, const Item* items, std::uint32_t begin, std::uint32_t end, std::uint32_t step,
-              const BinGrid& g) {
+  // Adds items [begin, end), item begin + k into set k % kSets, in one pass over them.
+  template <int kSets>
+  void add_to(const Item* items, std::uint32_t begin, std::uint32_t end, const BinGrid& g) {
     const __m128 cmin = load3(g.cmin);
     const __m128 scale4 = _mm_setr_ps(g.scale[0], g.scale[1], g.scale[2], 0.0f);
     const __m128i last = _mm_set1_epi32(g.nb - 1);
     const __m128i first = _mm_setzero_si128();
-    Box4* bx = &box[3 * set * cap];
-    Box4* by = bx + cap;
-    Box4* bz = by + cap;
-    std::uint32_t* cx = &count[3 * set * cap];
-    std::uint32_t* cy = cx + cap;
-    std::uint32_t* cz = cy + cap;
-    for (std::uint32_t i = begin; i < end; i += step) {
-      const __m128 lo = load_lo(items[i]);
-      const __m128 hi = load_hi(items[i]);
+    const __m128i one_count = _mm_setr_epi32(0, 0, 0, 1);
+    // Byte offsets of the axes' bins from the set's first: one base pointer for all three,
+    // a bin's offset computed in the same register as its index.
+    constexpr int kShift = 5;
+    static_assert(sizeof(Box4) == 1 << kShift);
+    const int axis_bytes = cap * static_cast<int>(sizeof(Box4));
+    const __m128i axis_offset = _mm_setr_epi32(0, axis_bytes, 2 * axis_bytes, 0);
+    char* const base = reinterpret_cast<char*>(box.data());
+    const std::size_t set_bytes = 3 * std::size_t(axis_bytes);
+    auto bump = [&](char* set, std::uint32_t offset, __m128 lo, __m128 hi) {
+      Box4& bin = *reinterpret_cast<Box4*>(set + offset);
+      bin.lo = _mm_min_ps(bin.lo, lo);
+      bin.hi = _mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(_mm_max_ps(bin.hi, hi)), one_count));
+    };
+    auto add_one = [&](const Item& item, int set) {
+      const __m128 lo = load_lo(item);
+      const __m128 hi = load_hi(item);
       // Clamped on both sides: on an inactive axis whose centroid extent overflowed,
       // (c - cmin) * 0 is inf * 0 = NaN, which converts to INT_MIN.
       const __m128i k = _mm_max_epi32(
           _mm_min_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(center4(lo, hi), cmin), scale4)), last), first);
-      const int kx = _mm_cvtsi128_si32(k);
-      const int ky = _mm_extract_epi32(k, 1);
-      const int kz = _mm_extract_epi32(k, 2);
-      bx[kx].extend(lo, hi);
-      by[ky].extend(lo, hi);
-      bz[kz].extend(lo, hi);
-      ++cx[kx];
-      ++cy[ky];
-      ++cz[kz];
-    }
+      const __m128i offset = _mm_add_epi32(_mm_slli_epi32(k, kShift), axis_offset);
+      char* const bins = base + set * set_bytes;
+      bump(bins, static_cast<std::uint32_t>(_mm_cvtsi128_si32(offset)), lo, hi);
+      bump(bins, static_cast<std::uint32_t>(_mm_extract_epi32(offset, 1)), lo, hi);
+      bump(bins, static_cast<std::uint32_t>(_mm_extract_epi32(offset, 2)), lo, hi);
+    };
+    std::uint32_t i = begin;
+    for (; end - i >= kSets; i += kSets)
+      for (int set = 0; set < kSets; ++set) add_one(items[i + set], set);
+    for (int set = 0; i < end; ++i, ++set) add_one(items[i], set);
   }
 };
 
@@ -261,39 +283,12 @@ class Splitter {
     }
     bin(t, grid, parallel);
 
-    // Sweep the bins from both sides to find the cheapest plane: cost in units of
-    // intersection_cost * area, A_left slots(N_left) + A_right slots(N_right).
-    float best_cost = kInf;
-    int best_axis = -1;
-    int best_bin = -1;  // left side takes bins [0, best_bin]
-    float left_area[256];
-    std::uint32_t left_count[256];
-    for (int a = 0; a < 3; ++a) {
-      if (!grid.active[a]) continue;
-      const Box4* bins = &bins_.box[a * bins_.cap];
-      const std::uint32_t* counts = &bins_.count[a * bins_.cap];
-      Box4 acc;
-      std::uint32_t n = 0;
-      for (int b = 0; b < nb - 1; ++b) {
-        acc.extend(bins[b]);
-        n += counts[b];
-        left_area[b] = acc.half_area();
-        left_count[b] = n;
-      }
-      acc = Box4{};
-      n = 0;
-      for (int b = nb - 1; b > 0; --b) {
-        acc.extend(bins[b]);
-        n += counts[b];
-        if (n == 0 || left_count[b - 1] == 0) continue;
-        const float cost = left_area[b - 1] * slots(left_count[b - 1]) + acc.half_area() * slots(n);
-        if (cost < best_cost) {
-          best_cost = cost;
-          best_axis = a;
-          best_bin = b - 1;
-        }
-      }
-    }
+    // The cheapest plane: cost in units of intersection_cost * area,
+    // A_left slots(N_left) + A_right slots(N_right).
+    const Plane plane = best_plane(grid);
+    const float best_cost = plane.cost;
+    const int best_axis = plane.axis;
+    const int best_bin = plane.bin;  // left side takes bins [0, best_bin]
 
     // Leaf or split (SAH normalised by this node's area A; compared multiplied by A so
     // that A = 0, a node flat to a segment or a point, is no division by zero):
@@ -312,6 +307,112 @@ class Splitter {
   }
 
  private:
+  // A plane between bins: the left side takes bins [0, bin] of `axis`; axis -1: none.
+  struct Plane {
+    float cost = kInf;
+    int axis = -1;
+    int bin = -1;
+  };
+
+  // Sweeps the bins from both sides, the three axes at once (lane a: axis a), in the order
+  // and with the float operations of one axis at a time: the same plane, ties included
+  // (the first axis, then the highest bin, of the least cost).
+  Plane best_plane(const BinGrid& grid) const {
+    const int nb = grid.nb;
+    __m128 left_area[256];  // lane a: area of bins [0, b] of axis a
+    __m128i left_count[256];
+    Box4 acc[3];
+    __m128i n = _mm_setzero_si128();
+    for (int b = 0; b < nb - 1; ++b) {
+      n = _mm_add_epi32(n, add_bins(acc, b));
+      left_area[b] = half_areas(acc);
+      left_count[b] = n;
+    }
+    const __m128 active =
+        _mm_castsi128_ps(_mm_setr_epi32(grid.active[0] ? -1 : 0, grid.active[1] ? -1 : 0, grid.active[2] ? -1 : 0, 0));
+    const __m128i zero = _mm_setzero_si128();
+    __m128 best_cost = _mm_set1_ps(kInf);
+    __m128i best_bin = _mm_set1_epi32(-1);
+    acc[0] = acc[1] = acc[2] = Box4{};
+    n = zero;
+    for (int b = nb - 1; b > 0; --b) {
+      n = _mm_add_epi32(n, add_bins(acc, b));
+      const __m128i lc = left_count[b - 1];
+      const __m128 cost = _mm_add_ps(_mm_mul_ps(left_area[b - 1], slots(lc)), _mm_mul_ps(half_areas(acc), slots(n)));
+      const __m128i a_side_empty = _mm_or_si128(_mm_cmpeq_epi32(n, zero), _mm_cmpeq_epi32(lc, zero));
+      const __m128 better =
+          _mm_andnot_ps(_mm_castsi128_ps(a_side_empty), _mm_and_ps(active, _mm_cmplt_ps(cost, best_cost)));
+      best_cost = _mm_blendv_ps(best_cost, cost, better);
+      best_bin = _mm_blendv_epi8(best_bin, _mm_set1_epi32(b - 1), _mm_castps_si128(better));
+    }
+    alignas(16) float costs[4];
+    alignas(16) std::int32_t bins[4];
+    _mm_store_ps(costs, best_cost);
+    _mm_store_si128(reinterpret_cast<__m128i*>(bins), best_bin);
+    Plane plane;
+    for (int a = 0; a < 3; ++a)
+      if (costs[a] < plane.cost) plane = {costs[a], a, bins[a]};
+    return plane;
+  }
+
+  // Extends acc[a] by bin b of axis a; returns the three bins' counts in lanes 0, 1, 2.
+  __m128i add_bins(Box4 (&acc)[3], int b) const {
+    const Box4& x = bins_.at(0, b);
+    const Box4& y = bins_.at(1, b);
+    const Box4& z = bins_.at(2, b);
+    // Lane 3 of hi (the count) cleared: the areas do arithmetic on these lanes.
+    acc[0].extend(x.lo, _mm_and_ps(x.hi, xyz_mask()));
+    acc[1].extend(y.lo, _mm_and_ps(y.hi, xyz_mask()));
+    acc[2].extend(z.lo, _mm_and_ps(z.hi, xyz_mask()));
+    const __m128 xy = _mm_unpackhi_ps(x.hi, y.hi);              // x2 y2 x3 y3
+    const __m128 z0 = _mm_unpackhi_ps(z.hi, _mm_setzero_ps());  // z2 0 z3 0
+    return _mm_castps_si128(_mm_movehl_ps(z0, xy));             // x3 y3 z3 0
+  }
+
+  // Box4::half_area of acc[0], acc[1], acc[2] in lanes 0, 1, 2 (the same products and sums).
+  static __m128 half_areas(const Box4 (&acc)[3]) {
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 d0 = _mm_sub_ps(acc[0].hi, acc[0].lo);
+    const __m128 d1 = _mm_sub_ps(acc[1].hi, acc[1].lo);
+    const __m128 d2 = _mm_sub_ps(acc[2].hi, acc[2].lo);
+    // Transposed: dx, dy, dz of the three boxes.
+    const __m128 lo01 = _mm_unpacklo_ps(d0, d1), lo2 = _mm_unpacklo_ps(d2, zero);
+    const __m128 hi01 = _mm_unpackhi_ps(d0, d1), hi2 = _mm_unpackhi_ps(d2, zero);
+    const __m128 dx = _mm_movelh_ps(lo01, lo2);
+    const __m128 dy = _mm_movehl_ps(lo2, lo01);
+    const __m128 dz = _mm_movelh_ps(hi01, hi2);
+    const __m128 area = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx));
+    const __m128 empty = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(dx, zero), _mm_cmplt_ps(dy, zero)), _mm_cmplt_ps(dz, zero));
+    return _mm_andnot_ps(empty, area);
+  }
+
+  // slots() of each lane of n, with the same float operations.
+  __m128 slots(__m128i n) const {
+    // Without padding the sum below is n + 0: skip it (the scalar leaf ISA's options).
+    if (!padded_leaves_) return u32_to_float(n);
+    const std::uint32_t w = static_cast<std::uint32_t>(opt_.leaf_block_width);
+    __m128i padded;
+    if (block_shift_ >= 0) {
+      const __m128i shift = _mm_cvtsi32_si128(block_shift_);
+      padded = _mm_sll_epi32(_mm_srl_epi32(_mm_add_epi32(n, _mm_set1_epi32(static_cast<int>(w - 1))), shift), shift);
+    } else {
+      alignas(16) std::uint32_t lanes[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes), n);
+      for (std::uint32_t& v : lanes) v = (v + w - 1) / w * w;
+      padded = _mm_load_si128(reinterpret_cast<const __m128i*>(lanes));
+    }
+    return _mm_add_ps(u32_to_float(n),
+                      _mm_mul_ps(_mm_set1_ps(opt_.padding_cost), u32_to_float(_mm_sub_epi32(padded, n))));
+  }
+
+  // Unsigned lanes to float, rounded once as static_cast<float>(std::uint32_t): both halves
+  // convert exactly and the one rounding is the sum's.
+  static __m128 u32_to_float(__m128i v) {
+    const __m128 high = _mm_cvtepi32_ps(_mm_srli_epi32(v, 16));
+    const __m128 low = _mm_cvtepi32_ps(_mm_and_si128(v, _mm_set1_epi32(0xffff)));
+    return _mm_add_ps(_mm_mul_ps(high, _mm_set1_ps(65536.0f)), low);
+  }
+
   // Test cost of n primitives in leaf blocks of leaf_block_width, in primitive tests: n plus
   // padding_cost per empty slot of the last block (a shift for the usual power-of-two
   // widths: the sweep asks twice per bin).
@@ -351,26 +452,35 @@ class Splitter {
   // centroids on the way: lanes of the other side are blended to the empty bound so
   // that one min and one max per side serve both sides.
   void partition(const Task& t, const BinGrid& grid, int a, int best_bin, Split& out) {
+    if (a == 0) return partition_on<0>(t, grid, best_bin, out);
+    if (a == 1) return partition_on<1>(t, grid, best_bin, out);
+    return partition_on<2>(t, grid, best_bin, out);
+  }
+
+  // partition() along axis A: the side computed in lane A, as binning computed the bin.
+  template <int A>
+  void partition_on(const Task& t, const BinGrid& grid, int best_bin, Split& out) {
     const __m128 pos_inf = _mm_set1_ps(kInf);
     const __m128 neg_inf = _mm_set1_ps(-kInf);
-    // The grid's fields as locals: the item stores below could alias them, which would
+    // The grid as registers: the item stores below could alias its fields, which would
     // make the compiler reload them for every item.
-    const float cmin = grid.cmin[a];
-    const float scale = grid.scale[a];
-    const int last_bin = grid.nb - 1;
+    const __m128 cmin = load3(grid.cmin);
+    const __m128 scale = _mm_setr_ps(grid.scale[0], grid.scale[1], grid.scale[2], 0.0f);
+    const __m128i last_bin = _mm_set1_epi32(grid.nb - 1);
+    const __m128i first_right = _mm_set1_epi32(best_bin + 1);
     Box4 lc, rc;
     std::uint32_t mid = t.begin;
     for (std::uint32_t i = t.begin; i < t.end; ++i) {
       const Item item = items_[i];
-      // Its bin as binning computed it; clamped because c == cmax maps to nb (c >= cmin, so
-      // the index is not negative on the active axis a).
-      const int b = static_cast<int>((item.center(a) - cmin) * scale);
-      const bool left = (b < last_bin ? b : last_bin) <= best_bin;
+      const __m128 c = center4(load_lo(item), load_hi(item));
+      // Its bin, clamped because c == cmax maps to nb (c >= cmin, so the index is not
+      // negative on the active axis A); left when below first_right, lane A broadcast.
+      const __m128i b = _mm_min_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, cmin), scale)), last_bin);
+      const __m128i left = _mm_shuffle_epi32(_mm_cmpgt_epi32(first_right, b), _MM_SHUFFLE(A, A, A, A));
       items_[i] = items_[mid];
       items_[mid] = item;
-      mid += left ? 1u : 0u;
-      const __m128 c = center4(load_lo(item), load_hi(item));
-      const __m128 is_left = _mm_castsi128_ps(_mm_set1_epi32(left ? -1 : 0));
+      mid -= static_cast<std::uint32_t>(_mm_cvtsi128_si32(left));  // -1 on the left
+      const __m128 is_left = _mm_castsi128_ps(left);
       lc.extend(_mm_blendv_ps(pos_inf, c, is_left), _mm_blendv_ps(neg_inf, c, is_left));
       rc.extend(_mm_blendv_ps(c, pos_inf, is_left), _mm_blendv_ps(c, neg_inf, is_left));
     }
@@ -378,10 +488,10 @@ class Splitter {
     Box4 lbox, rbox;
     std::uint32_t left_count = 0;
     for (int b = 0; b <= best_bin; ++b) {
-      lbox.extend(bins_.box[a * bins_.cap + b]);
-      left_count += bins_.count[a * bins_.cap + b];
+      lbox.extend(bins_.at(A, b));
+      left_count += bin_count(bins_.at(A, b));
     }
-    for (int b = best_bin + 1; b < grid.nb; ++b) rbox.extend(bins_.box[a * bins_.cap + b]);
+    for (int b = best_bin + 1; b < grid.nb; ++b) rbox.extend(bins_.at(A, b));
     assert(mid - t.begin == left_count && "partition disagrees with the bins");
     (void)left_count;
     out = {mid, lbox.to_bbox(), rbox.to_bbox(), lc.to_bbox(), rc.to_bbox()};
@@ -400,12 +510,28 @@ class Splitter {
       }
     }
     out = Split{mid, {}, {}, {}, {}};
-    for (std::uint32_t i = t.begin; i < t.end; ++i) {
-      const BBox b = items_[i].box();
-      (i < mid ? out.lbox : out.rbox).extend(b);
-      if (t.spatial) (i < mid ? out.lcbox : out.rcbox).extend(b.center());
-    }
+    bound(t.begin, mid, t.spatial, out.lbox, out.lcbox);
+    bound(mid, t.end, t.spatial, out.rbox, out.rcbox);
     return true;
+  }
+
+  // Bounds of items [begin, end) and, with `centroids`, of their centroids, bit for bit as
+  // BBox::extend grows them one item at a time: minps(new, acc) is new < acc ? new : acc,
+  // so NaN bounds of invalid primitives are ignored the same way.
+  void bound(std::uint32_t begin, std::uint32_t end, bool centroids, BBox& box, BBox& cbox) const {
+    Box4 b, c;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const __m128 lo = load_lo(items_[i]);
+      const __m128 hi = load_hi(items_[i]);
+      b.lo = _mm_min_ps(lo, b.lo);
+      b.hi = _mm_max_ps(hi, b.hi);
+      if (!centroids) continue;
+      const __m128 center = center4(lo, hi);
+      c.lo = _mm_min_ps(center, c.lo);
+      c.hi = _mm_max_ps(center, c.hi);
+    }
+    box = b.to_bbox();
+    if (centroids) cbox = c.to_bbox();
   }
 
   // A node of two primitives: SAH leaf-or-split (as in split()) with the children
@@ -430,6 +556,7 @@ class Splitter {
   Item* items_;
   Bins bins_;
   int block_shift_ = shift_of(opt_.leaf_block_width);  // log2(leaf_block_width), -1 if not a power of two
+  bool padded_leaves_ = opt_.leaf_block_width > 1 && opt_.padding_cost > 0.0f;  // slots(n) > n for some n
 };
 
 // Builds the subtree of one task depth first into its own node array: nodes[0] is the
@@ -487,20 +614,34 @@ class Builder {
     // the front in input order, the others to the back; both sets are bounded.
     std::uint32_t front = 0;
     std::uint32_t back = n_;
+    Box4 valid_box, valid_cbox;
+    const __m128 inf = _mm_set1_ps(kInf);
+    const __m128 sign = _mm_set1_ps(-0.0f);
     for (std::uint32_t i = 0; i < n_; ++i) {
       const BBox& b = boxes[i];
-      const glm::vec3 c = b.center();
-      const bool valid = !b.empty() && std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z);
-      const Item item{b.lo, 0.0f, b.hi, i};
+      // Two loads inside the 24-byte box: lo.x lo.y lo.z hi.x and lo.z hi.x hi.y hi.z.
+      const __m128 lo = _mm_and_ps(_mm_loadu_ps(&b.lo.x), xyz_mask());
+      const __m128 upper = _mm_loadu_ps(&b.lo.z);
+      const __m128 hi = _mm_and_ps(_mm_shuffle_ps(upper, upper, _MM_SHUFFLE(0, 3, 2, 1)), xyz_mask());
+      const __m128 c = center4(lo, hi);  // BBox::center()
+      // !b.empty() (lo <= hi, false for NaN) and a finite centroid (|c| < inf).
+      const __m128 ok = _mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmplt_ps(_mm_andnot_ps(sign, c), inf));
+      const bool valid = (_mm_movemask_ps(ok) & 7) == 7;
+      Item& item = items_[valid ? front++ : --back];
+      _mm_storeu_ps(&item.lo.x, lo);
+      _mm_storeu_ps(&item.hi.x, _mm_castsi128_ps(_mm_insert_epi32(_mm_castps_si128(hi), static_cast<int>(i), 3)));
       if (valid) {
-        items_[front++] = item;
-        valid_box_.extend(b);
-        valid_cbox_.extend(c);
+        // As BBox::extend: the new value only when strictly beyond (operands in this order).
+        valid_box.lo = _mm_min_ps(lo, valid_box.lo);
+        valid_box.hi = _mm_max_ps(hi, valid_box.hi);
+        valid_cbox.lo = _mm_min_ps(c, valid_cbox.lo);
+        valid_cbox.hi = _mm_max_ps(c, valid_cbox.hi);
       } else {
-        items_[--back] = item;
         invalid_box_.extend(b);
       }
     }
+    valid_box_ = valid_box.to_bbox();
+    valid_cbox_ = valid_cbox.to_bbox();
     // The invalid ones were stored back to front; restore input order among them.
     std::reverse(items_.get() + back, items_.get() + n_);
     n_valid_ = front;
@@ -623,7 +764,8 @@ BvhStats bvh_stats(const Bvh& bvh, const BvhBuildOptions& options) {
   s.bytes = bvh.nodes.size() * sizeof(BvhNode) + bvh.prim_index.size() * sizeof(std::uint32_t);
   if (bvh.nodes.empty()) return s;
 
-  // Depth-first walk with an explicit stack of (node, depth).
+  // Depth-first walk with an explicit stack of (node, depth), left child first: the order
+  // the builder lays nodes out in, so the walk reads the array nearly sequentially.
   double cost = 0.0;
   std::size_t prims = 0;
   std::vector<std::pair<std::uint32_t, std::size_t>> stack{{0u, 0u}};
@@ -639,8 +781,8 @@ BvhStats bvh_stats(const Bvh& bvh, const BvhBuildOptions& options) {
       cost += options.intersection_cost * area * node.count;
     } else {
       cost += options.traversal_cost * area;
-      stack.push_back({node.first_or_child, depth + 1});
       stack.push_back({node.first_or_child + 1, depth + 1});
+      stack.push_back({node.first_or_child, depth + 1});
     }
   }
   const double root_area = bvh.nodes[0].box.half_area();
