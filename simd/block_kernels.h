@@ -55,6 +55,21 @@ concept DetScaled = requires(const Cand& c) {
   c.den;
 };
 
+/// Tests whose candidates are a prefilter (watertight.h): the hits among the valid lanes
+/// are those T::confirm accepts on the quotient t.
+template <class T>
+concept QuotientDecides = T::kQuotientDecides;
+
+/// The valid lanes of `c` that hit, given their quotient t (cand_t) and the upper end.
+template <class T>
+[[gnu::always_inline]] inline auto confirmed(const typename T::Rays& r, const typename T::Cand& c,
+                                             const decltype(c.t)& t, const decltype(c.t)& upper) {
+  if constexpr (QuotientDecides<T>)
+    return T::confirm(r, c, t, upper);
+  else
+    return c.valid;
+}
+
 /// t of the candidate lanes (a true division for a det-scaled test).
 template <class Cand>
 [[gnu::always_inline]] inline auto cand_t(const Cand& c) {
@@ -130,19 +145,35 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
     if constexpr (kScaled) cand.den.store_aligned(dens);
     // Take hits in lane order, shrinking upper after each (the oracle's loop); a lane
     // hit against a larger upper may no longer be once an earlier lane shrank it.
-    int lane = std::countr_zero(bits);
-    for (;;) {
-      upper = kScaled ? ts[lane] / dens[lane] : ts[lane];
+    if constexpr (detail::QuotientDecides<T>) {
+      // Candidates only: each is divided and confirmed on its quotient in turn (the
+      // divisions are independent, so they overlap).
+      int win_lane = -1;
+      const float tmin = ray.ray.tmin;
+      for (; bits != 0; bits &= bits - 1) {
+        const int lane = std::countr_zero(bits);
+        const float t = ts[lane] / dens[lane];
+        if (tmin <= t && t < upper) upper = t, win_lane = lane;
+      }
+      if (win_lane < 0) continue;
       upper_b = B(upper);
-      bits &= ~((2u << lane) - 1u);  // lanes after `lane`
-      if (bits == 0) break;
-      bits &= detail::bits_from_mask<Arch>(T::accept(cand, upper_b));
-      if (bits == 0) break;
-      lane = std::countr_zero(bits);
+      win_u = us[win_lane], win_v = vs[win_lane], win_den = dens[win_lane];
+      win_prim = block.prim[win_lane];
+    } else {
+      int lane = std::countr_zero(bits);
+      for (;;) {
+        upper = kScaled ? ts[lane] / dens[lane] : ts[lane];
+        upper_b = B(upper);
+        bits &= ~((2u << lane) - 1u);  // lanes after `lane`
+        if (bits == 0) break;
+        bits &= detail::bits_from_mask<Arch>(T::accept(cand, upper_b));
+        if (bits == 0) break;
+        lane = std::countr_zero(bits);
+      }
+      win_u = us[lane], win_v = vs[lane];
+      if constexpr (kScaled) win_den = dens[lane];
+      win_prim = block.prim[lane];
     }
-    win_u = us[lane], win_v = vs[lane];
-    if constexpr (kScaled) win_den = dens[lane];
-    win_prim = block.prim[lane];
   }
   if (win_prim == kInvalidPrim) return;
   hit.t = upper;
@@ -157,8 +188,24 @@ bool RayBlockKernels<Arch, Test>::occluded(const PreparedRay& ray, const Block* 
   using B = detail::FloatB<Arch>;
   const auto rays = T::broadcast(ray);
   const B upper(ray.ray.tmax);
-  for (std::uint32_t b = 0; b < count; ++b)
-    if (xsimd::any(T::test(rays, T::load_block(blocks[b], rays), upper).valid)) return true;
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+    if constexpr (detail::QuotientDecides<T>) {
+      // Candidates only: the first whose quotient t is in [tmin, tmax) occludes.
+      std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
+      if (bits == 0) continue;
+      alignas(64) float ts[W], dens[W];
+      cand.t.store_aligned(ts);
+      cand.den.store_aligned(dens);
+      for (; bits != 0; bits &= bits - 1) {
+        const int lane = std::countr_zero(bits);
+        const float t = ts[lane] / dens[lane];
+        if (ray.ray.tmin <= t && t < ray.ray.tmax) return true;
+      }
+    } else if (xsimd::any(cand.valid)) {
+      return true;
+    }
+  }
   return false;
 }
 
@@ -194,12 +241,14 @@ void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, 
       for (int j = 0; j < W; ++j) {
         const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
         if (xsimd::none(cand.valid)) continue;
-        upper = xsimd::select(cand.valid, detail::cand_t(cand), upper);
-        hu = xsimd::select(cand.valid, cand.u, hu);
-        hv = xsimd::select(cand.valid, cand.v, hv);
-        if constexpr (kScaled) hden = xsimd::select(cand.valid, cand.den, hden);
-        hp = xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), hp);
-        any_hit = any_hit | cand.valid;
+        const B t = detail::cand_t(cand);
+        const M hit = detail::confirmed<T>(r, cand, t, upper);
+        upper = xsimd::select(hit, t, upper);
+        hu = xsimd::select(hit, cand.u, hu);
+        hv = xsimd::select(hit, cand.v, hv);
+        if constexpr (kScaled) hden = xsimd::select(hit, cand.den, hden);
+        hp = xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), hp);
+        any_hit = any_hit | hit;
       }
     }
     if (xsimd::none(any_hit)) continue;
@@ -231,12 +280,16 @@ void PacketKernels<Arch, Test, K>::intersect_triangle(const PreparedPacket<K>& p
                                   B(-std::numeric_limits<float>::infinity()));
     const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
     if (xsimd::none(cand.valid)) continue;
-    xsimd::select(cand.valid, detail::cand_t(cand), ht).store_aligned(hits.t + c);
+    const B t = detail::cand_t(cand);
+    const M hit = detail::confirmed<T>(r, cand, t, upper);
+    if constexpr (detail::QuotientDecides<T>)
+      if (xsimd::none(hit)) continue;
+    xsimd::select(hit, t, ht).store_aligned(hits.t + c);
     B u = cand.u, v = cand.v;
     if constexpr (detail::DetScaled<typename T::Cand>) u = u / cand.den, v = v / cand.den;
-    xsimd::select(cand.valid, u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
-    xsimd::select(cand.valid, v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
-    xsimd::select(cand.valid, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
+    xsimd::select(hit, u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
+    xsimd::select(hit, v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
+    xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
         .store_aligned(reinterpret_cast<float*>(hits.prim + c));
   }
 }
@@ -260,7 +313,14 @@ std::uint32_t PacketKernels<Arch, Test, K>::occluded(const PreparedPacket<K>& pr
     // Any hit ends a lane; the chunk ends when every active lane has one.
     for (std::uint32_t b = 0; b < count; ++b) {
       const Block& block = blocks[b];
-      for (int j = 0; j < W; ++j) hit = hit | T::test(r, T::broadcast_tri(block, j, r), upper).valid;
+      for (int j = 0; j < W; ++j) {
+        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+        if constexpr (detail::QuotientDecides<T>) {
+          if (xsimd::any(cand.valid)) hit = hit | T::confirm(r, cand, detail::cand_t(cand), upper);
+        } else {
+          hit = hit | cand.valid;
+        }
+      }
       if (xsimd::all(hit | ~act)) break;
     }
     result |= detail::bits_from_mask<Arch>(hit & act) << c;

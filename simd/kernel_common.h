@@ -69,6 +69,58 @@ MaskB<Arch> finite_nonzero(FloatB<Arch> x) {
   }
 }
 
+/// The comparisons of and_cmp (ordered: false when either side is NaN).
+enum class Cmp { ge, gt, le, lt };
+
+/// m & (a op b). One masked compare on AVX-512 (xsimd 8.1 combines masks through general
+/// registers there: a mask move each way per &), compare and and elsewhere.
+template <Cmp Op, class Arch>
+[[gnu::always_inline]] inline MaskB<Arch> and_cmp(MaskB<Arch> m, FloatB<Arch> a, FloatB<Arch> b) {
+  if constexpr (kHasMaskRegisters<Arch>) {
+    // _CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ (spelled out: the macros are not
+    // defined where the other ISAs' files instantiate nothing of this branch).
+    constexpr int kPredicate = Op == Cmp::ge ? 0x1d : Op == Cmp::gt ? 0x1e : Op == Cmp::le ? 0x12 : 0x11;
+    return MaskB<Arch>(_mm512_mask_cmp_ps_mask(m, a, b, kPredicate));
+  } else if constexpr (Op == Cmp::ge) {
+    return m & (a >= b);
+  } else if constexpr (Op == Cmp::gt) {
+    return m & (a > b);
+  } else if constexpr (Op == Cmp::le) {
+    return m & (a <= b);
+  } else {
+    return m & (a < b);
+  }
+}
+
+/// True when no lane of a, b or c is exactly +-0 (NaN lanes count as nonzero, so the inert
+/// NaN padding lanes of a block never look zero).
+template <class Arch>
+[[gnu::always_inline]] inline bool all_nonzero(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
+  if constexpr (kHasMaskRegisters<Arch>) {
+    constexpr int kNeqUnordered = 0x04;  // _CMP_NEQ_UQ: true for NaN
+    const FloatB<Arch> zero(0.0f);
+    typename MaskB<Arch>::register_type k = _mm512_cmp_ps_mask(a, zero, kNeqUnordered);
+    k = _mm512_mask_cmp_ps_mask(k, b, zero, kNeqUnordered);
+    k = _mm512_mask_cmp_ps_mask(k, c, zero, kNeqUnordered);
+    return _kortestc_mask16_u8(k, k) != 0;
+  } else {
+    const FloatB<Arch> zero(0.0f);
+    return xsimd::none((a == zero) | (b == zero) | (c == zero));
+  }
+}
+
+/// Lanes where a, b and c have the same sign bit: (a ^ b) | (a ^ c) has it clear (one
+/// ternary-logic instruction and a compare on AVX-512, an arithmetic shift elsewhere).
+template <class Arch>
+[[gnu::always_inline]] inline MaskB<Arch> same_sign_bit(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
+  using I = IntB<Arch>;
+  const I x = xsimd::bitwise_cast<I>((a ^ b) | (a ^ c));
+  if constexpr (kHasMaskRegisters<Arch>)
+    return MaskB<Arch>(_mm512_cmpgt_epi32_mask(x, I(-1)));
+  else
+    return ~MaskB<Arch>(static_cast<typename MaskB<Arch>::register_type>(xsimd::bitwise_cast<FloatB<Arch>>(x >> 31)));
+}
+
 /// True when Arch has an FMA instruction (AVX2 + FMA3, AVX-512). Only those kernels fuse:
 /// elsewhere a fused a b + c would be a libm fmaf call per lane (~2 ns, 15x slower).
 template <class Arch>

@@ -9,8 +9,15 @@
 // (tests/simd/test_watertight.cpp checks it on closed meshes with the shipped flags).
 // A lane whose float edge function is exactly 0 is recomputed in double (exact products),
 // one lane at a time; watertight_fallback_lanes counts them.
+//
+// Division-free decision (as moller.h): test() passes the lanes whose scaled distance
+// t det lies in [tmin, upper] |det| (a conservative prefilter, the oracle's); the kernel
+// forms divide only those candidates and confirm tmin <= t < upper on the quotient, which
+// is what decides, as in the oracle. u and v are divided once, for the final winner.
 #pragma once
 #include <bit>
+#include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -22,8 +29,9 @@
 
 namespace volley::simd::detail {
 
-/// Relative widening of the scaled range prefilter: core::kScaledPad<float> (the oracle's;
-/// not included here, per-ISA files must not include src/core; tests/simd asserts equality).
+/// Relative widening of the lower end of the scaled range prefilter: core::kScaledPad<float>
+/// (the oracle's; not included here, per-ISA files must not include src/core; tests/simd
+/// asserts equality).
 inline constexpr float kScaledPad = 2 * std::numeric_limits<float>::epsilon();
 
 /// Watertight test on kLanes<Arch> (ray, triangle) pairs. Reads WatertightBlock<kLanes<Arch>>.
@@ -40,11 +48,13 @@ struct WatertightTest {
   /// lanes (`uniform`, always so for a single ray; then kx, ky, kz apply) or per lane
   /// (masks x0: kx == 0, x1: kx == 1, likewise y0, y1 for ky and z0, z1 for kz).
   struct Rays {
-    B o[3];             // origin x y z (per-lane permutation)
-    B okx, oky, okz;    // origin along kx, ky, kz (uniform permutation)
+    B o[3];           // origin x y z (per-lane permutation)
+    B okx, oky, okz;  // origin along kx, ky, kz (uniform permutation)
     B tmin;
-    B sx, sy, sz;       // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
-    M ok;               // |sz| > 0: an infinite dir[kz] (sz = 0) or NaN never hits
+    B tmin_lo;     // lower end of the prefilter, tmin - |tmin| kScaledPad (then times
+                   // |det|); NaN where |sz| > 0 fails: an infinite dir[kz] (sz = 0)
+                   // or a NaN one never hits
+    B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
     bool uniform;
     int kx, ky, kz;
     M x0, x1, y0, y1, z0, z1;
@@ -54,13 +64,19 @@ struct WatertightTest {
   struct Tris {
     B akx, aky, akz, bkx, bky, bkz, ckx, cky, ckz;
   };
-  /// Candidate hits: `valid` lanes are hit with tmin <= t < upper. ts_s and ad (the
-  /// scaled distance with det's sign folded in, and |det|) let accept() redo the
-  /// oracle's scaled range test for a smaller upper.
+  /// Candidate hits, det-scaled: `valid` lanes pass the scaled range prefilter; the hits
+  /// among them are the lanes where confirm() holds for the quotient t / den. t, u, v are
+  /// t det, u det, v det and den = det (t = t / den ...), meaningful in valid lanes only.
   struct Cand {
     M valid;
-    B t, u, v, ts_s, ad;
+    B t, u, v, den;
   };
+  /// The edge functions U, V, W of the lanes.
+  struct Edges {
+    B u, v, w;
+  };
+  /// The candidates' quotients decide (the kernel forms call confirm() on them).
+  static constexpr bool kQuotientDecides = true;
 
   [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
   /// The oracle's make_woop_ray for every lane, and whether the active lanes share axes.
@@ -73,11 +89,15 @@ struct WatertightTest {
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
-  /// The lanes of `c` still hit when the upper end shrinks to `upper`.
-  [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
-  /// Recomputes the edge functions of the lanes in `lanes` in double (exact products).
-  /// Out of line and cold: the test stays small enough to inline.
-  [[gnu::noinline, gnu::cold]] static void fallback(std::uint32_t lanes, B ax, B ay, B bx, B by, B cx, B cy, B& eu, B& ev, B& ew);
+  /// The lanes of `c` hit, given their quotient t = c.t / c.den: tmin <= t < upper, the
+  /// oracle's final test.
+  [[gnu::always_inline]] inline static M confirm(const Rays& r, const Cand& c, B t, B upper) {
+    return and_cmp<Cmp::lt, Arch>(and_cmp<Cmp::le, Arch>(c.valid, r.tmin, t), t, upper);
+  }
+  /// Recomputes the edge functions of the lanes with a zero one in double (exact
+  /// products) and returns all three. Out of line and cold: the test stays small enough
+  /// to inline, and its hot path keeps the edge functions in registers.
+  [[gnu::noinline, gnu::cold]] static Edges fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew);
 };
 
 template <class Arch>
@@ -91,7 +111,9 @@ auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
   out.sx = B(r.s[0]);
   out.sy = B(r.s[1]);
   out.sz = B(r.s[2]);
-  out.ok = xsimd::abs(out.sz) > B(0.0f);
+  const float tmin = r.ray.tmin;
+  out.tmin_lo =
+      B(std::abs(r.s[2]) > 0.0f ? tmin - std::abs(tmin) * kScaledPad : std::numeric_limits<float>::quiet_NaN());
   out.uniform = true;
   out.kx = r.k[0];
   out.ky = r.k[1];
@@ -165,7 +187,8 @@ auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays 
   out.sx = B::load_aligned(p.s[0] + offset);
   out.sy = B::load_aligned(p.s[1] + offset);
   out.sz = B::load_aligned(p.s[2] + offset);
-  out.ok = xsimd::abs(out.sz) > B(0.0f);
+  out.tmin_lo = xsimd::select(xsimd::abs(out.sz) > B(0.0f), out.tmin - xsimd::abs(out.tmin) * B(kScaledPad),
+                              B(std::numeric_limits<float>::quiet_NaN()));
   out.uniform = p.uniform != 0;
   if (out.uniform) {
     out.kx = p.uk[0];
@@ -186,13 +209,16 @@ auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays 
 
 template <class Arch>
 auto WatertightTest<Arch>::load_block(const Block& b, const Rays& r) -> Tris {
-  // Single ray: always uniform, so the permutation is an index into the block.
-  const int kx = r.kx, ky = r.ky, kz = r.kz;
-  return {B::load_aligned(b.p[0][kx]) - r.okx, B::load_aligned(b.p[0][ky]) - r.oky,
-          B::load_aligned(b.p[0][kz]) - r.okz, B::load_aligned(b.p[1][kx]) - r.okx,
-          B::load_aligned(b.p[1][ky]) - r.oky, B::load_aligned(b.p[1][kz]) - r.okz,
-          B::load_aligned(b.p[2][kx]) - r.okx, B::load_aligned(b.p[2][ky]) - r.oky,
-          B::load_aligned(b.p[2][kz]) - r.okz};
+  // Single ray: always uniform, so the permutation is an index into the block. Addressed
+  // as bytes of the block (vertex k's arrays at a fixed offset from p0's), so that three
+  // offsets serve all nine loads instead of nine addresses kept in registers.
+  const auto* bytes = reinterpret_cast<const unsigned char*>(b.p);
+  const std::size_t x = r.kx * sizeof(b.p[0][0]), y = r.ky * sizeof(b.p[0][0]), z = r.kz * sizeof(b.p[0][0]);
+  const auto at = [bytes](int k, std::size_t axis) {
+    return B::load_aligned(reinterpret_cast<const float*>(bytes + k * sizeof(b.p[0]) + axis));
+  };
+  return {at(0, x) - r.okx, at(0, y) - r.oky, at(0, z) - r.okz, at(1, x) - r.okx, at(1, y) - r.oky,
+          at(1, z) - r.okz, at(2, x) - r.okx, at(2, y) - r.oky, at(2, z) - r.okz};
 }
 
 template <class Arch>
@@ -226,44 +252,37 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   const B cx = tri.ckx - r.sx * tri.ckz;
   const B cy = tri.cky - r.sy * tri.ckz;
   // Scaled barycentrics: 2D edge functions at the origin, both products rounded.
-  B eu = cx * by - cy * bx;
-  B ev = ax * cy - ay * cx;
-  B ew = bx * ay - by * ax;
-  // An edge function of exactly 0 may hide a nonzero one: redo those lanes in double.
-  const M any_zero = (eu == zero) | (ev == zero) | (ew == zero);
-  if (xsimd::any(any_zero)) fallback(bits_from_mask<Arch>(any_zero), ax, ay, bx, by, cx, cy, eu, ev, ew);
-  // Mixed signs: the origin is outside (both facings accepted). An infinite dir[kz]
-  // (sz = 0, every hit at t = 0) or a NaN direction fails.
-  M valid = r.ok & ~(((eu < zero) | (ev < zero) | (ew < zero)) & ((eu > zero) | (ev > zero) | (ew > zero)));
-  // det = 0: the ray lies in the plane; NaN and Inf fail.
-  const B det = eu + ev + ew;
-  valid = valid & finite_nonzero<Arch>(det);
+  Edges e{cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax};
+  // Mixed signs: the origin is outside (both facings accepted). With no edge function
+  // exactly 0 the signs are the sign bits (a NaN lane fails on det below). An exact 0 may
+  // hide a nonzero one: those lanes are redone in double, and signs are then compared as
+  // the oracle does, where 0 goes with either sign.
+  M inside;
+  if (all_nonzero<Arch>(e.u, e.v, e.w)) [[likely]] {
+    inside = same_sign_bit<Arch>(e.u, e.v, e.w);
+  } else {
+    e = fallback(ax, ay, bx, by, cx, cy, e.u, e.v, e.w);
+    inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
+  }
+  // det NaN or Inf fails here; det = 0 (the ray lies in the plane) fails on its quotient
+  // t = 0 / 0 (the prefilter passes it only with t det = 0), so no test of its own.
+  const B det = e.u + e.v + e.w;
   const B ad = xsimd::abs(det);
-  if (xsimd::none(valid)) return {valid, det, det, det, det, ad};
-  // Scaled distance t det against [tmin, upper) |det| with det's sign folded in: the
-  // oracle's prefilter, widened by kScaledPad so that only the quotient decides.
+  M valid = and_cmp<Cmp::le, Arch>(inside, ad, B(std::numeric_limits<float>::max()));
+  if (xsimd::none(valid)) return {valid, det, det, det, det};
+  // Scaled distance t det against [tmin, upper] |det| with det's sign folded in: the
+  // oracle's prefilter, which never rejects a lane the quotient would accept.
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;
-  const B ts = eu * az + ev * bz + ew * cz;
+  const B ts = e.u * az + e.v * bz + e.w * cz;
   const B ts_s = ts ^ (det & B(-0.0f));
-  const B pad(kScaledPad);
-  const B lo = r.tmin * ad, hi = upper * ad;
-  valid = valid & (ts_s >= lo - xsimd::abs(lo) * pad) & (ts_s < hi + xsimd::abs(hi) * pad);
-  if (xsimd::none(valid)) return {valid, det, det, det, ts_s, ad};
-  // Normalize the survivors and recheck the range on the quotient (as the oracle does).
-  const B t = ts / det;
-  valid = valid & (r.tmin <= t) & (t < upper);
-  return {valid, t, ev / det, ew / det, ts_s, ad};
+  valid = and_cmp<Cmp::le, Arch>(and_cmp<Cmp::ge, Arch>(valid, ts_s, r.tmin_lo * ad), ts_s, upper * ad);
+  return {valid, ts, e.v, e.w, det};
 }
 
 template <class Arch>
-auto WatertightTest<Arch>::accept(const Cand& c, B upper) -> M {
-  const B hi = upper * c.ad;
-  return c.valid & (c.ts_s < hi + xsimd::abs(hi) * B(kScaledPad)) & (c.t < upper);
-}
-
-template <class Arch>
-void WatertightTest<Arch>::fallback(std::uint32_t lanes, B ax, B ay, B bx, B by, B cx, B cy, B& eu, B& ev,
-                                    B& ew) {
+auto WatertightTest<Arch>::fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew) -> Edges {
+  const B zero(0.0f);
+  std::uint32_t lanes = bits_from_mask<Arch>((eu == zero) | (ev == zero) | (ew == zero));
   alignas(64) float fax[W], fay[W], fbx[W], fby[W], fcx[W], fcy[W], feu[W], fev[W], few[W];
   ax.store_aligned(fax), ay.store_aligned(fay), bx.store_aligned(fbx), by.store_aligned(fby);
   cx.store_aligned(fcx), cy.store_aligned(fcy);
@@ -277,9 +296,7 @@ void WatertightTest<Arch>::fallback(std::uint32_t lanes, B ax, B ay, B bx, B by,
     fev[i] = float(double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]));
     few[i] = float(double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]));
   }
-  eu = B::load_aligned(feu);
-  ev = B::load_aligned(fev);
-  ew = B::load_aligned(few);
+  return {B::load_aligned(feu), B::load_aligned(fev), B::load_aligned(few)};
 }
 
 }  // namespace volley::simd::detail

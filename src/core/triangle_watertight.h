@@ -11,7 +11,8 @@
 
 namespace volley::core {
 
-/// Relative widening of the watertight test's scaled range prefilter (see below).
+/// Relative widening of the lower end of the watertight test's scaled range prefilter (see
+/// below).
 template <class T>
 inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
 
@@ -104,21 +105,25 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
   const T det = eu + ev + ew;
   if (!(std::abs(det) > 0 && std::abs(det) <= std::numeric_limits<T>::max())) return false;
 
-  // Scaled hit distance t * det, tested against [tmin, tmax) * |det| with det's sign folded
+  // Scaled hit distance t * det, tested against [tmin, tmax] * |det| with det's sign folded
   // in, so most rejected candidates need no division (paper, section 3.5). False for NaN.
-  // A prefilter only: its bounds are widened by kScaledPad (2 eps, more than the rounding
-  // of tmax * |det| and of the widening itself), so it never rejects a t that the quotient
-  // test below accepts. Unwidened, it rejected triangles 1 ulp nearer than the current hit
-  // (rays aimed at shared vertices), and the closest hit depended on the visiting order.
+  // A prefilter only, which never rejects a t that the quotient test below accepts. Upper
+  // end: t < tmax in float means t_scaled / det < tmax exactly (rounding is monotonic and
+  // tmax a float), so ts < tmax * |det| exactly and ts <= fl(tmax * |det|), subnormal
+  // products included. A strict ts < fl(tmax * |det|) rejected triangles 1 ulp nearer than
+  // the current hit (rays aimed at shared vertices), and the closest hit depended on the
+  // visiting order. Lower end: tmin widened by kScaledPad (2 eps, more than the rounding of
+  // the quotient and of the products). The SIMD kernels compute the same bounds.
   const T az = w.sz * a[w.kz];
   const T bz = w.sz * b[w.kz];
   const T cz = w.sz * c[w.kz];
   const T t_scaled = eu * az + ev * bz + ew * cz;
   const T sign = det < 0 ? T(-1) : T(1);
   const T ad = det * sign;
-  const T lo = ray.tmin * ad, hi = ray.tmax * ad;
+  const T tmin_lo = ray.tmin - std::abs(ray.tmin) * kScaledPad<T>;
+  const T lo = tmin_lo * ad, hi = ray.tmax * ad;
   const T ts = t_scaled * sign;
-  if (!(ts >= lo - std::abs(lo) * kScaledPad<T> && ts < hi + std::abs(hi) * kScaledPad<T>)) return false;
+  if (!(ts >= lo && ts <= hi)) return false;
 
   // Normalize and decide on the quotient: tmin <= t < tmax exactly.
   const T t = t_scaled / det;
