@@ -47,11 +47,15 @@ Runner register_info(CLI::App& app) {
                 double(info.bytes) / double(std::max<std::size_t>(1, info.triangles + info.polygons)));
     std::printf("build       %.3f s (%.2f M primitives/s)\n", info.build_seconds,
                 double(info.triangles + info.polygons) / std::max(info.build_seconds, 1e-9) * 1e-6);
-    std::printf("features    lights %s, mirrors %s, refraction %s, emission %s, polygons %s, smooth normals %s\n",
-                f.lights ? "yes" : "no", f.mirrors ? "yes" : "no", f.refraction ? "yes" : "no",
-                f.emission ? "yes" : "no", f.polygons ? "yes" : "no", f.smooth_normals ? "yes" : "no");
+    std::printf(
+        "features    lights %s, mirrors %s, refraction %s, emission %s, polygons %s, smooth normals %s, "
+        "closed %s, opaque %s\n",
+        f.lights ? "yes" : "no", f.mirrors ? "yes" : "no", f.refraction ? "yes" : "no", f.emission ? "yes" : "no",
+        f.polygons ? "yes" : "no", f.smooth_normals ? "yes" : "no", f.closed ? "yes" : "no",
+        f.refraction ? "no" : "yes");
     std::printf("skipped     %s\n",
                 render::describe_skipped(render::needed_stages(scene.features()), scene.features()).c_str());
+    std::printf("occlusion   %s\n", render::describe_culling(f).c_str());
     return 0;
   };
 }

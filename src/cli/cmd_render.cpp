@@ -40,6 +40,7 @@ void print_stats(const render::Scene& scene, const render::RenderResult& r) {
               double(info.bytes) / double(std::max<std::size_t>(1, info.triangles + info.polygons)),
               info.build_seconds);
   std::printf("skipped: %s\n", render::describe_skipped(r.stages, f).c_str());
+  std::printf("occlusion: %s\n", render::describe_culling(f).c_str());
 }
 
 }  // namespace

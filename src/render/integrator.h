@@ -36,6 +36,12 @@ using ShadeFn = glm::vec3 (*)(const Scene& scene, const PathState& path, const H
 using ContinueFn = glm::vec3 (*)(const Scene& scene, const PathState& path, const SurfacePoint& s,
                                  const glm::vec3& view_dir, int max_depth, std::vector<PathState>& next);
 
+/// Whether the continuation of `kind` for `stages` reads the surface point beyond its
+/// material: Whitted without mirrors or glass only adds emission and ambient light.
+constexpr bool continuation_reads_surface(IntegratorKind kind, unsigned stages) {
+  return kind == IntegratorKind::path || (stages & (kMirrors | kRefraction)) != 0;
+}
+
 /// The shading function of `kind` compiled for `stages` (any subset of kAllStages).
 ShadeFn whitted_shader(unsigned stages);
 ShadeFn path_shader(unsigned stages);

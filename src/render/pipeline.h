@@ -32,4 +32,8 @@ unsigned needed_stages(const SceneFeatures& features);
 /// One line per stage left out, saying why (for --stats and volley info).
 std::string describe_skipped(unsigned stages, const SceneFeatures& features);
 
+/// Whether back-face culling of occlusion rays is admissible for the scene (closed and
+/// opaque, SceneFeatures::cull_admissible) and whether it is used, with the reason.
+std::string describe_culling(const SceneFeatures& features);
+
 }  // namespace volley::render

@@ -100,10 +100,10 @@ void trace_shadows_through(const Scene& scene, TileWork& w) {
 
 // The pipeline a render runs, chosen once (render/pipeline.h).
 struct Pipeline {
-  unsigned stages;  ///< bits of Stage
-  ShadeFn shade;    ///< shading compiled for those stages, one hit at a time
-  ContinueFn then;  ///< its continuation after direct light
-  bool batch;       ///< shade whole streams in SIMD lanes (shade_batch.h)
+  unsigned stages;     ///< bits of Stage
+  ShadeFn shade;       ///< shading compiled for those stages, one hit at a time
+  bool batch;          ///< shade whole streams in SIMD lanes (shade_batch.h)
+  BatchShading lanes;  ///< how, when batch
 };
 
 void render_tile(const Scene& scene, const RenderOptions& options, const Pipeline& pipeline, int x0, int y0,
@@ -133,8 +133,8 @@ void render_tile(const Scene& scene, const RenderOptions& options, const Pipelin
       w.next.clear();
       w.shadows.clear();
       if (pipeline.batch) {
-        shade_batch(scene, pipeline.stages, pipeline.shade, pipeline.then, w.paths.data(), w.hits.data(),
-                    w.paths.size(), options.max_depth, w.next, w.shadows, w.sum.data());
+        shade_batch(scene, pipeline.lanes, w.paths.data(), w.hits.data(), w.paths.size(), options.max_depth, w.next,
+                    w.shadows, w.sum.data());
       } else {
         for (std::size_t i = 0; i < w.paths.size(); ++i) {
           const PathState& p = w.paths[i];
@@ -169,9 +169,11 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
 
   const unsigned stages = options.specialize ? needed_stages(scene.features()) : kAllStages;
   const bool whitted = options.integrator == IntegratorKind::whitted;
-  const Pipeline pipeline{stages, whitted ? whitted_shader(stages) : path_shader(stages),
-                          whitted ? whitted_continuation(stages) : path_continuation(stages),
-                          batch_shadable(stages)};
+  const ShadeFn shade = whitted ? whitted_shader(stages) : path_shader(stages);
+  // Lanes as wide as the traversal kernels' ISA (the scalar oracle shades in SSE4.2 lanes).
+  const BatchShading lanes{stages, shade, whitted ? whitted_continuation(stages) : path_continuation(stages),
+                           continuation_reads_surface(options.integrator, stages), scene.accel().info().isa};
+  const Pipeline pipeline{stages, shade, batch_shadable(stages), lanes};
   std::mutex merge;
   int done = 0;
   tbb::enumerable_thread_specific<TileWork> work_per_thread;

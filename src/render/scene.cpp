@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/closed_surface.h"
 #include "render/spawn.h"
 
 namespace volley::render {
@@ -89,6 +90,12 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   features_.lights = !lights_.empty();
   features_.polygons = !polygons_.empty();
   features_.smooth_normals = !corner_normals_.empty();
+  core::ClosureCheck closure;
+  closure.add_triangles(positions_, indices_);
+  for (const auto& poly : desc.polygons) closure.add_face(poly.vertices.data(), poly.vertices.size());
+  const core::ClosureReport closed = closure.finish();
+  features_.closed = closed.closed();
+  features_.open_edges = closed.unmatched;
   for (const auto& m : materials_) {
     features_.mirrors |= glm::length(m.mirror) > 0.0f;
     features_.refraction |= glm::length(m.transmittance) > 0.0f;

@@ -21,6 +21,14 @@ struct SceneFeatures {
   bool emission = false;    ///< an emissive material
   bool polygons = false;
   bool smooth_normals = false;  ///< per-corner normals to interpolate
+  /// Every triangle and polygon bounds a closed, consistently oriented solid
+  /// (core/closed_surface.h); open_edges counts the edges that keep it from being so.
+  bool closed = false;
+  std::size_t open_edges = 0;
+  /// Back-face culling is admissible for occlusion rays: all geometry closed and every
+  /// material opaque (no transmittance), so a shadow ray between two points outside the
+  /// solids that is blocked at all is blocked by a front face.
+  bool cull_admissible() const { return closed && !refraction; }
 };
 
 /// A surface point ready for shading.

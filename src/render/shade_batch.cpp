@@ -1,224 +1,167 @@
-// The batch shader: each group of L hits is gathered into lanes, the surface point,
-// its error bound, the normal, Phong direct light and the shadow-ray origins are computed
-// for all lanes at once, and the results are written back in the scalar loop's order.
-// Every expression mirrors Scene::surface_as, queue_direct_lighting and spawn_shadow_ray
-// operation for operation (glm's dot is (x + y) + z, normalize is v * (1 / sqrt(dot)));
-// only std::pow stays per lane, and what follows direct light (the integrator's
-// continuation: ambient and emission, or the path's next bounce) runs lane by lane.
+// The batch shader: the triangle hits of a stream are gathered into the rows of a
+// structure-of-arrays buffer, the lanes kernel of the chosen ISA computes surface points
+// and each light's shadow rays for all of them (shade_lanes.h), and the results are written
+// back in the scalar loop's order. Only std::pow stays per hit, and what follows direct
+// light (the integrator's continuation: ambient and emission, or the path's next bounce).
 #include "render/shade_batch.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <limits>
-#include <xsimd/xsimd.hpp>
 
-#include "render/spawn.h"
+#include "render/shade_lanes.h"
 
 namespace volley::render {
 namespace {
 
-using B = xsimd::batch<float>;
-using I = xsimd::batch<std::int32_t>;
-constexpr int L = int(B::size);
-
-struct V3 {
-  B x, y, z;
+struct LaneKernels {
+  void (*surfaces)(float* rows, std::size_t stride, std::size_t count);
+  void (*light)(const float* rows, std::size_t stride, std::size_t count, const float position[3], float* out);
+  std::size_t lanes;
 };
 
-V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(const B& s, const V3& a) { return {s * a.x, s * a.y, s * a.z}; }
-V3 operator*(const V3& a, const B& s) { return {a.x * s, a.y * s, a.z * s}; }
-V3 abs(const V3& a) { return {xsimd::abs(a.x), xsimd::abs(a.y), xsimd::abs(a.z)}; }
-B dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }  // (x + y) + z, as glm
-V3 normalize(const V3& a) { return a * (B(1.0f) / xsimd::sqrt(dot(a, a))); }
-// std::max(a, b) = a < b ? b : a.
-B max_of(const B& a, const B& b) { return xsimd::select(a < b, b, a); }
-V3 max_of(const V3& a, const V3& b) { return {max_of(a.x, b.x), max_of(a.y, b.y), max_of(a.z, b.z)}; }
-
-// std::nextafter(x, +inf) (Up) or (x, -inf) for finite x, on the bit patterns.
-template <bool Up>
-B next_float(const B& x) {
-  const I bits = xsimd::bitwise_cast<I>(x);
-  const B zero(0.0f);
-  const I step = Up ? xsimd::select(xsimd::bool_cast(x < zero), I(-1), I(1))
-                    : xsimd::select(xsimd::bool_cast(x > zero), I(-1), I(1));
-  const B moved = xsimd::bitwise_cast<B>(bits + step);
-  // From +-0 the next float is the smallest subnormal of the direction's sign.
-  const B tiny(Up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min());
-  return xsimd::select(x == zero, tiny, moved);
+template <class Arch>
+LaneKernels kernels_of(std::size_t lanes) {
+  return {&ShadeLanes<Arch>::surfaces, &ShadeLanes<Arch>::light, lanes};
 }
 
-// Bit k set when lane k of `m` is true.
-std::uint32_t bits_of(const xsimd::batch_bool<float>& m) {
-  alignas(64) float f[L];
-  xsimd::select(m, B(1.0f), B(0.0f)).store_aligned(f);
-  std::uint32_t bits = 0;
-  for (int k = 0; k < L; ++k) bits |= (f[k] != 0.0f ? 1u : 0u) << k;
-  return bits;
+LaneKernels kernels_for(Isa isa) {
+  switch (isa) {
+    case Isa::avx512:
+      return kernels_of<xsimd::avx512bw>(16);
+    case Isa::avx2:
+      return kernels_of<xsimd::fma3<xsimd::avx2>>(8);
+    default:
+      return kernels_of<xsimd::sse4_2>(4);  // the build's baseline ISA
+  }
 }
 
-// The lanes of a group, loaded from per-lane scalars.
-struct Lanes {
-  alignas(64) float v[L];
-  B load() const { return B::load_aligned(v); }
-};
-struct Lanes3 {
-  Lanes x, y, z;
-  void set(int k, const glm::vec3& a) { x.v[k] = a.x, y.v[k] = a.y, z.v[k] = a.z; }
-  V3 load() const { return {x.load(), y.load(), z.load()}; }
-};
-void store(const V3& a, Lanes3& out) {
-  a.x.store_aligned(out.x.v);
-  a.y.store_aligned(out.y.v);
-  a.z.store_aligned(out.z.v);
-}
-glm::vec3 lane(const Lanes3& a, int k) { return {a.x.v[k], a.y.v[k], a.z.v[k]}; }
+constexpr std::size_t kRowAlign = 16;  // floats: 64 bytes, the widest lane count
+constexpr std::uint32_t kNotInLanes = ~0u;
 
-// One light's shadow query for every lane of a group.
-struct LightLanes {
-  std::uint32_t lit = 0;  // lanes that queue a shadow ray
-  Lanes r_dot_v;          // for the specular term (std::pow stays per lane)
-  Lanes3 diffuse_term, org, dir;
-  Lanes dist2;
-};
+// `floats` floats starting at a 64-byte boundary inside `buffer`.
+float* aligned_floats(std::vector<float>& buffer, std::size_t floats) {
+  buffer.resize(floats + kRowAlign);
+  const std::size_t misalign = reinterpret_cast<std::uintptr_t>(buffer.data()) % (kRowAlign * sizeof(float));
+  return buffer.data() + (misalign ? (kRowAlign * sizeof(float) - misalign) / sizeof(float) : 0);
+}
+
+glm::vec3 row3(const float* rows, std::size_t stride, int row, std::size_t k) {
+  return {rows[row * stride + k], rows[(row + 1) * stride + k], rows[(row + 2) * stride + k]};
+}
+
+void set_row3(float* rows, std::size_t stride, int row, std::size_t k, const glm::vec3& a) {
+  rows[row * stride + k] = a.x;
+  rows[(row + 1) * stride + k] = a.y;
+  rows[(row + 2) * stride + k] = a.z;
+}
 
 }  // namespace
 
-void shade_batch(const Scene& scene, unsigned stages, ShadeFn one, ContinueFn then, const PathState* paths,
-                 const Hit* hits, std::size_t n, int max_depth, std::vector<PathState>& next,
-                 std::vector<ShadowQuery>& shadows, glm::vec3* sum) {
+void shade_batch(const Scene& scene, const BatchShading& how, const PathState* paths, const Hit* hits, std::size_t n,
+                 int max_depth, std::vector<PathState>& next, std::vector<ShadowQuery>& shadows, glm::vec3* sum) {
   const std::size_t triangles = scene.triangle_count();
   const glm::vec3* pos = scene.positions().data();
   const std::uint32_t* idx = scene.indices().data();
   const std::uint32_t* tri_material = scene.triangle_materials().data();
   const std::vector<io::Material>& materials = scene.materials();
-  const bool shadows_on = (stages & kShadows) != 0;
-  const std::size_t light_count = shadows_on ? scene.lights().size() : 0;
+  const std::vector<io::PointLight>& lights = scene.lights();
+  const std::size_t light_count = (how.stages & kShadows) != 0 ? lights.size() : 0;
+  const LaneKernels kernels = kernels_for(how.isa);
   // Per thread and reused: this runs once per bounce of every tile.
-  thread_local std::vector<LightLanes> per_light;
-  per_light.resize(light_count);
+  thread_local std::vector<float> surface_buffer, light_buffer;
+  thread_local std::vector<std::uint32_t> lane_of;
 
-  if (triangles == 0) {  // polygons only: nothing to gather
-    for (std::size_t i = 0; i < n; ++i) sum[paths[i].pixel] += one(scene, paths[i], hits[i], max_depth, next, shadows);
-    return;
-  }
-  for (std::size_t first = 0; first < n; first += L) {
-    const int count = int(std::min<std::size_t>(L, n - first));
-    // Gather the lanes that hit a triangle; the others are shaded one at a time below.
-    std::uint32_t batch = 0;
-    Lanes u, v;
-    Lanes3 p0, p1, p2, dir, diffuse;
-    std::uint32_t material[L] = {};
-    for (int k = 0; k < L; ++k) {
-      const bool ok = k < count && hits[first + k].hit() && hits[first + k].prim < triangles;
-      const Hit& h = hits[first + (ok ? k : 0)];
-      if (ok) batch |= 1u << k;
-      const std::uint32_t* t = ok ? idx + 3 * std::size_t(h.prim) : idx;
-      // Inert lanes compute on a copy of triangle 0 of the scene seen by a unit ray.
-      p0.set(k, pos[t[0]]);
-      p1.set(k, pos[t[1]]);
-      p2.set(k, pos[t[2]]);
-      u.v[k] = ok ? h.u : 0.25f;
-      v.v[k] = ok ? h.v : 0.25f;
-      const Ray& r = paths[first + (ok ? k : 0)].ray;
-      dir.set(k, ok ? glm::vec3(r.dir[0], r.dir[1], r.dir[2]) : glm::vec3(0.0f, 0.0f, 1.0f));
-      material[k] = ok ? tri_material[h.prim] : 0;
-      diffuse.set(k, materials[material[k]].diffuse);
-    }
-    Lanes3 point, point_error, normal, view_dir;
-    std::uint32_t front_bits = 0;
-    if (batch != 0) {
-      // render::hit_point and the normal of Scene::surface_as<false>.
-      const V3 a = p0.load(), b = p1.load(), c = p2.load();
-      const B bu = u.load(), bv = v.load();
-      const B b0 = B(1.0f) - bu - bv;
-      const V3 p = b0 * a + bu * b + bv * c;
-      V3 p_error = B(gamma(7)) * (abs(b0 * a) + abs(bu * b) + abs(bv * c));
-      const V3 reach = max_of(abs(a - p), max_of(abs(b - p), abs(c - p)));
-      const B reach_max = max_of(reach.x, max_of(reach.y, reach.z));
-      p_error = p_error + V3{B(gamma(8)) * reach_max, B(gamma(8)) * reach_max, B(gamma(8)) * reach_max};
-      const V3 e1 = b - a, e2 = c - a;
-      V3 ng = normalize(V3{e1.y * e2.z - e2.y * e1.z, e1.z * e2.x - e2.z * e1.x, e1.x * e2.y - e2.x * e1.y});
-      const V3 d_raw = dir.load();
-      const auto front = dot(ng, d_raw) < B(0.0f);
-      ng = {xsimd::select(front, ng.x, -ng.x), xsimd::select(front, ng.y, -ng.y), xsimd::select(front, ng.z, -ng.z)};
-      // queue_direct_lighting with ns = ng, view_dir = normalize(dir).
-      const V3 view = normalize(d_raw);
-      store(p, point);
-      store(p_error, point_error);
-      store(ng, normal);
-      store(view, view_dir);
-      front_bits = bits_of(front);
-      const V3 kd = diffuse.load();
-      const V3 abs_p = abs(p);
-      const B p_max = max_of(abs_p.x, max_of(abs_p.y, abs_p.z));
-      const V3 err = p_error + V3{B(gamma(2)) * p_max, B(gamma(2)) * p_max, B(gamma(2)) * p_max};
-      const B err_n = dot(abs(ng), err);
-      for (std::size_t j = 0; j < light_count; ++j) {
-        const glm::vec3& lp = scene.lights()[j].position;
-        const V3 light{B(lp.x), B(lp.y), B(lp.z)};
-        const V3 to_light = light - p;
-        const B dist2 = dot(to_light, to_light);
-        const B len = xsimd::sqrt(dist2);
-        const V3 l{to_light.x / len, to_light.y / len, to_light.z / len};
-        const B n_dot_l = dot(ng, l);  // = dot(l, ng) = dot(ns, l): products commute
-        LightLanes& out = per_light[j];
-        // Lit unless n.l <= 0 (a NaN n.l stays lit, as in the scalar test).
-        out.lit = ~bits_of(n_dot_l <= B(0.0f)) & batch;
-        store(kd * n_dot_l, out.diffuse_term);
-        // reflect(-l, ns) = d - 2 dot(d, n) n with d = -l; then its dot with -view.
-        const V3 ml{-l.x, -l.y, -l.z};
-        const B two_dot = B(2.0f) * dot(ml, ng);
-        const V3 r = ml - two_dot * ng;
-        dot(r, V3{-view.x, -view.y, -view.z}).store_aligned(out.r_dot_v.v);
-        dist2.store_aligned(out.dist2.v);
-        // spawn_shadow_ray(p, p_error, ng, light): offset_origin toward light - p.
-        const auto toward = dot(to_light, ng) < B(0.0f);
-        const B side = xsimd::select(toward, B(-1.0f), B(1.0f));
-        const V3 offset = (side * err_n) * ng;
-        const V3 moved = p + offset;
-        const B zero(0.0f);
-        auto round_away = [&](const B& po, const B& off) {
-          return xsimd::select(off > zero, next_float<true>(po), xsimd::select(off < zero, next_float<false>(po), po));
-        };
-        const V3 o{round_away(moved.x, offset.x), round_away(moved.y, offset.y), round_away(moved.z, offset.z)};
-        store(o, out.org);
-        store(light - o, out.dir);
-      }
-    }
-    // Write back in the one-at-a-time order: per path, its direct light, then its queries.
-    for (int k = 0; k < count; ++k) {
-      const std::size_t i = first + k;
-      const PathState& path = paths[i];
-      if (!((batch >> k) & 1u)) {
-        sum[path.pixel] += one(scene, path, hits[i], max_depth, next, shadows);
+  // Nothing reads the surface point (no lights, and a continuation that only needs the
+  // material): skip the lanes altogether.
+  if (light_count == 0 && !how.then_reads_surface) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Hit& h = hits[i];
+      if (!h.hit() || h.prim >= triangles) {
+        sum[paths[i].pixel] += how.one(scene, paths[i], h, max_depth, next, shadows);
         continue;
       }
-      const io::Material& m = materials[material[k]];
-      const bool specular = m.specular != glm::vec3(0.0f);
-      if (m.diffuse != glm::vec3(0.0f) || specular) {
-        for (std::size_t j = 0; j < light_count; ++j) {
-          const LightLanes& ll = per_light[j];
-          if (!((ll.lit >> k) & 1u)) continue;
-          glm::vec3 c = lane(ll.diffuse_term, k);
-          const float r_dot_v = ll.r_dot_v.v[k];
-          if (specular && r_dot_v > 0.0f) c += m.specular * std::pow(r_dot_v, m.shininess);
-          const io::PointLight& light = scene.lights()[j];
-          const glm::vec3 o = lane(ll.org, k), d = lane(ll.dir, k);
-          shadows.push_back({Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, 1.0f},
-                             path.weight * c * light.intensity / ll.dist2.v[k], path.pixel});
-        }
-      }
       SurfacePoint sp;
-      sp.p = lane(point, k);
-      sp.p_error = lane(point_error, k);
-      sp.ng = sp.ns = lane(normal, k);
-      sp.front = (front_bits >> k) & 1u;
-      sp.material = material[k];
-      sum[path.pixel] += then(scene, path, sp, lane(view_dir, k), max_depth, next);
+      sp.material = tri_material[h.prim];
+      sum[paths[i].pixel] += how.then(scene, paths[i], sp, glm::vec3(0.0f), max_depth, next);
     }
+    return;
+  }
+  // Gather the triangle hits into lanes; misses and polygon hits stay out.
+  const std::size_t stride = (n + kRowAlign - 1) / kRowAlign * kRowAlign;
+  float* rows = aligned_floats(surface_buffer, kSurfaceRows * stride);
+  lane_of.resize(n);
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Hit& h = hits[i];
+    if (!h.hit() || h.prim >= triangles) {
+      lane_of[i] = kNotInLanes;
+      continue;
+    }
+    const std::uint32_t* t = idx + 3 * std::size_t(h.prim);
+    set_row3(rows, stride, kP0X, count, pos[t[0]]);
+    set_row3(rows, stride, kP1X, count, pos[t[1]]);
+    set_row3(rows, stride, kP2X, count, pos[t[2]]);
+    rows[kU * stride + count] = h.u;
+    rows[kV * stride + count] = h.v;
+    const Ray& r = paths[i].ray;
+    set_row3(rows, stride, kDirX, count, {r.dir[0], r.dir[1], r.dir[2]});
+    lane_of[i] = std::uint32_t(count++);
+  }
+  // Padding lanes up to the lane count: a unit triangle seen by a unit ray (no NaN, no
+  // subnormals to slow the lanes down).
+  const std::size_t padded = (count + kernels.lanes - 1) / kernels.lanes * kernels.lanes;
+  for (std::size_t k = count; k < padded; ++k) {
+    set_row3(rows, stride, kP0X, k, {0.0f, 0.0f, 0.0f});
+    set_row3(rows, stride, kP1X, k, {1.0f, 0.0f, 0.0f});
+    set_row3(rows, stride, kP2X, k, {0.0f, 1.0f, 0.0f});
+    rows[kU * stride + k] = rows[kV * stride + k] = 0.25f;
+    set_row3(rows, stride, kDirX, k, {0.0f, 0.0f, 1.0f});
+  }
+  float* light_rows = aligned_floats(light_buffer, std::max<std::size_t>(1, light_count) * kLightRows * stride);
+  if (padded != 0) {
+    kernels.surfaces(rows, stride, padded);
+    for (std::size_t j = 0; j < light_count; ++j) {
+      const glm::vec3& p = lights[j].position;
+      const float position[3] = {p.x, p.y, p.z};
+      kernels.light(rows, stride, padded, position, light_rows + j * kLightRows * stride);
+    }
+  }
+
+  // Write back in the one-at-a-time order: per path, its direct light, then its continuation.
+  for (std::size_t i = 0; i < n; ++i) {
+    const PathState& path = paths[i];
+    const std::size_t k = lane_of[i];
+    if (k == kNotInLanes) {
+      sum[path.pixel] += how.one(scene, path, hits[i], max_depth, next, shadows);
+      continue;
+    }
+    SurfacePoint sp;
+    sp.material = tri_material[hits[i].prim];
+    const io::Material& m = materials[sp.material];
+    const bool specular = m.specular != glm::vec3(0.0f);
+    if (m.diffuse != glm::vec3(0.0f) || specular) {
+      for (std::size_t j = 0; j < light_count; ++j) {
+        const float* l = light_rows + j * kLightRows * stride;
+        const float n_dot_l = l[kNDotL * stride + k];
+        if (n_dot_l <= 0.0f) continue;  // the light is behind the surface (NaN stays lit, as in the scalar test)
+        glm::vec3 c = m.diffuse * n_dot_l;
+        const float r_dot_v = l[kRDotV * stride + k];
+        if (specular && r_dot_v > 0.0f) c += m.specular * std::pow(r_dot_v, m.shininess);
+        const glm::vec3 o = row3(l, stride, kOrgX, k), d = row3(l, stride, kShadowX, k);
+        shadows.push_back({Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, 1.0f},
+                           path.weight * c * lights[j].intensity / l[kDist2 * stride + k], path.pixel});
+      }
+    }
+    glm::vec3 view_dir(0.0f);
+    if (how.then_reads_surface) {
+      sp.p = row3(rows, stride, kPX, k);
+      sp.p_error = row3(rows, stride, kErrX, k);
+      sp.ng = sp.ns = row3(rows, stride, kNX, k);
+      sp.front = rows[kFront * stride + k] != 0.0f;
+      view_dir = row3(rows, stride, kViewX, k);
+    }
+    sum[path.pixel] += how.then(scene, path, sp, view_dir, max_depth, next);
   }
 }
 

@@ -11,15 +11,10 @@
 
 #include <glm/glm.hpp>
 
+#include "render/rounding.h"
 #include "volley/ray.h"
 
 namespace volley::render {
-
-/// Higham's gamma(n) = n u / (1 - n u), u = 2^-24: bound on n float roundings.
-constexpr float gamma(int n) {
-  constexpr float u = std::numeric_limits<float>::epsilon() * 0.5f;
-  return (float(n) * u) / (1.0f - float(n) * u);
-}
 
 /// The point of a triangle hit from its barycentrics, and in `error` the bound of its
 /// rounding per axis (pbrt, Pharr et al., 4th ed., 6.8) plus what a ray leaving it costs the

@@ -111,6 +111,22 @@ TEST_CASE("cli: a small render writes the PNG and prints the summary line") {
   CHECK(r.output.find("rays by kind") != std::string::npos);
 }
 
+TEST_CASE("cli: info and render --stats say whether the geometry is closed and back-face culling admissible") {
+  const fs::path quad = temp_file("open_quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  const Run open = run("info " + quad.string());
+  CHECK(open.status == 0);
+  CHECK(open.output.find("closed no, opaque yes") != std::string::npos);
+  CHECK(open.output.find("occlusion   back-face culling not admissible: open geometry (4 edges") != std::string::npos);
+  const Run sphere = run("info " + kScenes + "/meshes/sphere.obj");
+  CHECK(sphere.output.find("closed yes, opaque yes") != std::string::npos);
+  CHECK(sphere.output.find("back-face culling admissible (all geometry closed, all materials opaque), not used: ") !=
+        std::string::npos);
+  const fs::path out = fs::temp_directory_path() / "volley_cli_test" / "cornell_culling.png";
+  const Run glass = run("render " + kScenes + "/cornell.json --width 16 --height 16 --stats -o " + out.string());
+  CHECK(glass.output.find("occlusion: back-face culling not admissible: open geometry") != std::string::npos);
+  CHECK(glass.output.find("transmissive materials") != std::string::npos);
+}
+
 TEST_CASE("cli: info prints sizes and BVH facts for a bare mesh") {
   const fs::path p = temp_file("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
   const Run r = run("info " + p.string());

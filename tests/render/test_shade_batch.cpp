@@ -9,6 +9,7 @@
 #include "io/scene_loader.h"
 #include "render/pipeline.h"
 #include "render/renderer.h"
+#include "simd/dispatch.h"
 
 using namespace volley;
 
@@ -36,8 +37,9 @@ io::SceneDesc spheres_on_a_floor() {
   return desc;
 }
 
-void check_batch_matches_general(const io::SceneDesc& desc, render::IntegratorKind kind, int width, int height) {
-  const render::Scene scene(desc, width, height, Options{});
+void check_one_isa(const io::SceneDesc& desc, render::IntegratorKind kind, int width, int height,
+                   const Options& options) {
+  const render::Scene scene(desc, width, height, options);
   render::RenderOptions ro;
   ro.spp = 3;
   ro.integrator = kind;
@@ -51,12 +53,40 @@ void check_batch_matches_general(const io::SceneDesc& desc, render::IntegratorKi
   CHECK(special.image.pixels == general.image.pixels);
 }
 
+// The lanes run at the traversal kernels' ISA: every one this CPU has (the scalar oracle
+// shades in SSE4.2 lanes).
+std::vector<Isa> lane_isas() {
+  std::vector<Isa> out;
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512})
+    if (simd::cpu_has(isa)) out.push_back(isa);
+  return out;
+}
+
+void check_batch_matches_general(const io::SceneDesc& desc, render::IntegratorKind kind, int width, int height) {
+  for (Isa isa : lane_isas()) {
+    const std::string isa_name(to_string(isa));
+    CAPTURE(isa_name);
+    Options options;
+    options.isa = isa;
+    check_one_isa(desc, kind, width, height, options);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("shade_batch: bit-identical to one-at-a-time shading (Whitted and path)") {
   const io::SceneDesc desc = spheres_on_a_floor();
   // 37 x 23: tiles and 4x4 blocks cut short at the image edges, so streams have lengths
   // that are not multiples of the lane count.
+  for (auto kind : {render::IntegratorKind::whitted, render::IntegratorKind::path}) {
+    CAPTURE(int(kind));
+    check_batch_matches_general(desc, kind, 37, 23);
+  }
+}
+
+TEST_CASE("shade_batch: without lights (Whitted then reads only the material: no lanes), both integrators") {
+  io::SceneDesc desc = spheres_on_a_floor();
+  desc.lights.clear();
   for (auto kind : {render::IntegratorKind::whitted, render::IntegratorKind::path}) {
     CAPTURE(int(kind));
     check_batch_matches_general(desc, kind, 37, 23);
