@@ -45,7 +45,6 @@ simd::WideNode<N> inert_node() {
   return node;
 }
 
-
 // The SAH-optimal collapse of Ylitie, Karras and Laine, "Efficient incoherent ray traversal
 // on GPUs through compressed wide BVHs" (HPG 2017), with the binary leaves kept as they
 // are: a wide node for binary node n gets the forest of at most N subtrees below n whose
@@ -59,7 +58,8 @@ simd::WideNode<N> inert_node() {
 // hit) takes no slot and costs nothing.
 class CollapsePlan {
  public:
-  explicit CollapsePlan(const core::Bvh& bvh) : bvh_(bvh), cost_(bvh.nodes.size()), choice_(bvh.nodes.size()), split_(bvh.nodes.size()) {
+  explicit CollapsePlan(const core::Bvh& bvh)
+      : bvh_(bvh), cost_(bvh.nodes.size()), choice_(bvh.nodes.size()), split_(bvh.nodes.size()) {
     // Post order with an explicit stack (no recursion: a binary BVH may be 64 deep).
     std::vector<std::pair<std::uint32_t, bool>> stack{{0u, false}};
     while (!stack.empty()) {
@@ -101,8 +101,8 @@ class CollapsePlan {
       double best = kInfD;
       int best_j = 0;
       if (lempty || rempty) {
-        // One child is empty: all i slots go to the other (j = i: left, j = 0 encoded as
-        // N + 1 means right; both empty cannot happen below a non-empty root).
+        // An empty child takes no slot: all i go to the other (j = i: the left child, j = 0:
+        // the right one; two empty children cost nothing).
         if (lempty && rempty) {
           best = 0.0, best_j = 0;
         } else if (rempty) {

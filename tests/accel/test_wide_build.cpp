@@ -176,8 +176,9 @@ TEST_CASE("wide build: the SAH-optimal collapse is never worse than the greedy o
       CHECK(wide.stats.triangles == n);
       CHECK(wide.stats.sah_cost <= greedy * (1.0 + 1e-12));
       CHECK(wide.stats.mean_children <= double(volley::simd::kWideN));
-      if (n == 30000) MESSAGE("SAH cost ", wide.stats.sah_cost, " (greedy ", greedy, "), ", wide.stats.nodes,
-                              " nodes, ", wide.stats.mean_children, " children each");
+      if (n == 30000)
+        MESSAGE("SAH cost ", wide.stats.sah_cost, " (greedy ", greedy, "), ", wide.stats.nodes, " nodes, ",
+                wide.stats.mean_children, " children each");
     }
   }
 }
