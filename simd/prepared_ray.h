@@ -11,10 +11,10 @@ namespace volley::simd {
 /// prepare_ray(); immutable afterwards, so one PreparedRay may be reused for every leaf
 /// the ray visits. 64 bytes, one cache line.
 struct alignas(64) PreparedRay {
-  Ray ray;               // 32 bytes: the ray as given
-  std::int32_t k[3];     // 12 bytes: watertight axes kx, ky, kz (kz = largest |dir|)
-  float s[3];            // 12 bytes: watertight shear Sx, Sy, Sz
-  std::uint32_t pad[2];  //  8 bytes
+  Ray ray;            // 32 bytes: the ray as given
+  std::int32_t k[3];  // 12 bytes: watertight axes kx, ky, kz (kz = largest |dir|)
+  float s[3];         // 12 bytes: watertight shear Sx, Sy, Sz
+  float sure[2];      //  8 bytes: watertight any hit, core::sure_quotient_range(tmin, tmax)
 };
 static_assert(sizeof(PreparedRay) == 64, "PreparedRay: one cache line");
 

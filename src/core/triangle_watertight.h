@@ -16,6 +16,22 @@ namespace volley::core {
 template <class T>
 inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
 
+/// Factors {lo, hi} such that a ray hits a triangle with tmin <= t < upper whenever its
+/// det-scaled distance (t det, det's sign folded in) lies strictly between fl(lo |det|) and
+/// fl(hi |det|) and the edge and det tests pass: the division-free any-hit decision of the
+/// SIMD kernels (simd/watertight.h, sure_hit; the reasons are given there). Lanes outside
+/// (within ~16 ulps of either end, or not hit) are left to the quotient test.
+template <class T>
+constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
+  constexpr T kEps = std::numeric_limits<T>::epsilon(), kMin = std::numeric_limits<T>::min();
+  constexpr T kInf = std::numeric_limits<T>::infinity();
+  const T lo = tmin > 0 ? (tmin < kMin ? kMin : tmin) * (1 + 8 * kEps) : tmin <= 0 ? T(0) : kInf;
+  const T hi = upper >= kMin
+                   ? (upper < std::numeric_limits<T>::max() ? upper : std::numeric_limits<T>::max()) * (1 - 8 * kEps)
+                   : -kInf;
+  return {lo, hi};
+}
+
 /// Per-ray constants of the watertight test: an axis permutation and a shear that map the
 /// ray onto the unit +z axis from the origin. 24 bytes for float.
 template <class T>
