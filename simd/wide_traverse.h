@@ -23,6 +23,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -263,7 +264,9 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
   // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
   // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
   // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
-  const __m128 org_tmin = _mm_loadu_ps(ray.org), dir_tmax = _mm_loadu_ps(ray.dir);
+  static_assert(offsetof(Ray, tmin) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tmax) == 28);
+  const float* const f = reinterpret_cast<const float*>(&ray);  // org, tmin, dir, tmax
+  const __m128 org_tmin = _mm_loadu_ps(f), dir_tmax = _mm_loadu_ps(f + 4);
   const __m128 zero = _mm_setzero_ps();
   const __m128 ok_o = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero),
                                    _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
