@@ -10,6 +10,8 @@
 // Forms:
 //   1xblock:    one ray against the leaf's blocks (closest hit), RayBlockKernels::intersect;
 //   1xblock_any: the same, any hit (occluded);
+//   1x64:       one ray against four consecutive leaves in one call (64 triangles; closest
+//               hit): the call's fixed cost spread over four times the tests;
 //   16x1:       a coherent packet of 16 rays against one triangle at a time,
 //               PacketKernels<.., 16>::intersect_triangle over the leaf's triangles
 //               (packets prepared once beforehand, as a traversal would);
@@ -136,8 +138,11 @@ struct Leaves {
   const Block* leaf(int i) const { return blocks.data() + kBlocks * i; }
 };
 
-template <class Arch, TriangleTest Test, bool AnyHit>
+/// One ray against `Group` consecutive leaves per call (Group = 1: the 16-triangle leaf;
+/// 4: a 64-triangle run, which spreads the call's fixed cost over four times the tests).
+template <class Arch, TriangleTest Test, bool AnyHit, int Group = 1>
 void single_ray(benchmark::State& state, bool aimed) {
+  static_assert(kLeaves % Group == 0);
   const Workload& w = workload(aimed);
   const Leaves<Arch, Test> leaves(w);
   std::vector<std::vector<volley::simd::PreparedRay>> prepared(kLeaves);
@@ -147,21 +152,22 @@ void single_ray(benchmark::State& state, bool aimed) {
   const int passes = leaf_passes();
   for (auto _ : state) {
     for (int pass = 0; pass < passes; ++pass) {
-      const int l = pass % kLeaves;
+      const int l = (pass * Group) % kLeaves;
       const auto* blocks = leaves.leaf(l);
+      constexpr std::uint32_t count = Group * Leaves<Arch, Test>::kBlocks;
       for (const auto& pr : prepared[l]) {
         if constexpr (AnyHit) {
-          hits += volley::simd::RayBlockKernels<Arch, Test>::occluded(pr, blocks, Leaves<Arch, Test>::kBlocks);
+          hits += volley::simd::RayBlockKernels<Arch, Test>::occluded(pr, blocks, count);
         } else {
           Hit h;
-          volley::simd::RayBlockKernels<Arch, Test>::intersect(pr, blocks, Leaves<Arch, Test>::kBlocks, h);
+          volley::simd::RayBlockKernels<Arch, Test>::intersect(pr, blocks, count, h);
           hits += h.hit();
         }
       }
     }
     benchmark::DoNotOptimize(hits);
   }
-  state.SetItemsProcessed(state.iterations() * kLeaves * kRaysPerLeaf * kLeaf);
+  state.SetItemsProcessed(state.iterations() * kLeaves * kRaysPerLeaf * kLeaf * Group);
   state.counters["hit_rate"] = double(hits) / double(state.iterations() * passes * kRaysPerLeaf);
 }
 
@@ -259,6 +265,8 @@ void register_isa() {
     const std::string base = "triangle/" + test_name(Test) + "/" + isa + "/";
     benchmark::RegisterBenchmark((base + "1xblock" + suffix).c_str(),
                                  [=](benchmark::State& s) { single_ray<Arch, Test, false>(s, aimed); s.SetLabel(isa); });
+    benchmark::RegisterBenchmark((base + "1x64" + suffix).c_str(),
+                                 [=](benchmark::State& s) { single_ray<Arch, Test, false, 4>(s, aimed); s.SetLabel(isa); });
     benchmark::RegisterBenchmark((base + "1xblock_any" + suffix).c_str(),
                                  [=](benchmark::State& s) { single_ray<Arch, Test, true>(s, aimed); s.SetLabel(isa); });
     benchmark::RegisterBenchmark((base + "16x1" + suffix).c_str(),
