@@ -25,7 +25,7 @@ Runner register_info(CLI::App& app) {
     const io::SceneDesc desc = io::load_scene(args->scene, shared_scenes_dir(args->kernel.scenes));
     const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(args->kernel));
     const AccelInfo info = scene.accel().info();
-    const auto& f = scene.features();
+    const render::SceneFeatures f = render::with_closure(scene, desc);
     std::printf("scene       %s\n", args->scene.c_str());
     std::printf("geometry    %zu triangles (%zu degenerate), %zu polygons, %zu vertices\n", info.triangles,
                 info.degenerate, info.polygons, desc.mesh.positions.size());
@@ -54,7 +54,7 @@ Runner register_info(CLI::App& app) {
         f.polygons ? "yes" : "no", f.smooth_normals ? "yes" : "no", f.closed ? "yes" : "no",
         f.refraction ? "no" : "yes");
     std::printf("skipped     %s\n",
-                render::describe_skipped(render::needed_stages(scene.features()), scene.features()).c_str());
+                render::describe_skipped(render::needed_stages(f), f).c_str());
     std::printf("occlusion   %s\n", render::describe_culling(f).c_str());
     return 0;
   };

@@ -27,9 +27,9 @@ struct RenderArgs {
   KernelArgs kernel;
 };
 
-void print_stats(const render::Scene& scene, const render::RenderResult& r) {
+void print_stats(const render::Scene& scene, const io::SceneDesc& desc, const render::RenderResult& r) {
   const AccelInfo info = scene.accel().info();
-  const auto& f = scene.features();
+  const render::SceneFeatures f = render::with_closure(scene, desc);
   std::printf("rays by kind:");
   for (std::size_t k = 0; k < r.stats.rays.size(); ++k)
     std::printf(" %s %llu%s", std::string(render::kRayKindNames[k]).c_str(),
@@ -88,7 +88,7 @@ Runner register_render(CLI::App& app) {
         a.output.empty() ? std::filesystem::path("out") / (std::filesystem::path(a.scene).stem().string() + ".png")
                          : std::filesystem::path(a.output);
     io::write_png(out, r.image.width, r.image.height, r.image.pixels);
-    if (a.stats) print_stats(scene, r);
+    if (a.stats) print_stats(scene, desc, r);
     const double rays = double(r.stats.total());
     std::printf("%s: %dx%d, %d spp, %s, %llu rays in %.3f s, %.2f Mrays/s, %d threads -> %s\n",
                 a.scene.c_str(), width, height, ro.spp, integrator.c_str(),

@@ -90,12 +90,6 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   features_.lights = !lights_.empty();
   features_.polygons = !polygons_.empty();
   features_.smooth_normals = !corner_normals_.empty();
-  core::ClosureCheck closure;
-  closure.add_triangles(positions_, indices_);
-  for (const auto& poly : desc.polygons) closure.add_face(poly.vertices.data(), poly.vertices.size());
-  const core::ClosureReport closed = closure.finish();
-  features_.closed = closed.closed();
-  features_.open_edges = closed.unmatched;
   for (const auto& m : materials_) {
     features_.mirrors |= glm::length(m.mirror) > 0.0f;
     features_.refraction |= glm::length(m.transmittance) > 0.0f;
@@ -142,5 +136,16 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
 
 template SurfacePoint Scene::surface_as<true>(const Ray&, const Hit&) const;
 template SurfacePoint Scene::surface_as<false>(const Ray&, const Hit&) const;
+
+SceneFeatures with_closure(const Scene& scene, const io::SceneDesc& desc) {
+  core::ClosureCheck closure;
+  closure.add_triangles(scene.positions(), scene.indices());
+  for (const auto& poly : desc.polygons) closure.add_face(poly.vertices.data(), poly.vertices.size());
+  const core::ClosureReport report = closure.finish();
+  SceneFeatures f = scene.features();
+  f.closed = report.closed();
+  f.open_edges = report.unmatched;
+  return f;
+}
 
 }  // namespace volley::render

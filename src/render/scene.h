@@ -23,6 +23,7 @@ struct SceneFeatures {
   bool smooth_normals = false;  ///< per-corner normals to interpolate
   /// Every triangle and polygon bounds a closed, consistently oriented solid
   /// (core/closed_surface.h); open_edges counts the edges that keep it from being so.
+  /// Filled by with_closure() only (Scene::features() leaves them false and 0).
   bool closed = false;
   std::size_t open_edges = 0;
   /// Back-face culling is admissible for occlusion rays: all geometry closed and every
@@ -91,5 +92,11 @@ class Scene {
   };
   std::vector<PolygonShading> polygons_;
 };
+
+/// scene.features() with the closed-and-opaque analysis filled in (closed, open_edges) from
+/// the scene's triangles and desc's polygons (the desc the scene was made from). Not part of
+/// the constructor: it costs about a third of a BVH build, no pipeline uses it yet (culling is
+/// not wired), and only `volley info` and `render --stats` report it.
+SceneFeatures with_closure(const Scene& scene, const io::SceneDesc& desc);
 
 }  // namespace volley::render

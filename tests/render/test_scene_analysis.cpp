@@ -25,7 +25,7 @@ io::SceneDesc scene_of(const accuracy::Mesh& mesh) {
 }
 
 render::SceneFeatures features_of(const io::SceneDesc& desc) {
-  return render::Scene(desc, 16, 16, Options{}).features();
+  return render::with_closure(render::Scene(desc, 16, 16, Options{}), desc);
 }
 
 // accuracy::grid_cube winds the faces at both levels of an axis alike (the leak tests need
