@@ -8,16 +8,9 @@
 #include "core/bbox.h"
 #include "core/bvh.h"
 #include "core/geometry.h"
+#include "core/rounding.h"
 
 namespace volley::core {
-
-/// pbrt's gamma(n) = n u / (1 - n u) with u = 2^-24, the unit roundoff of float: bounds
-/// the relative error of n chained float operations (Pharr, Jakob, Humphreys, PBR 3rd
-/// ed., sec. 3.9.1).
-constexpr float rounding_gamma(int n) {
-  constexpr float u = 0x1p-24f;
-  return static_cast<float>(n) * u / (1.0f - static_cast<float>(n) * u);
-}
 
 /// Factor applied to a box's exit distance so that the slab test is conservative:
 /// each slab distance (bound - org) * inv_dir carries three roundings (the difference,

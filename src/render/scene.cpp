@@ -123,7 +123,7 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
     const glm::vec3 p = org + hit.t * dir;
     // Project onto the plane: the bound then only covers the plane equation's rounding.
     s.p = p - (glm::dot(poly.normal, p) - poly.d) * poly.normal;
-    s.p_error = gamma(8) * (glm::abs(s.p) + glm::vec3(std::abs(poly.d)));
+    s.p_error = core::rounding_gamma(8) * (glm::abs(s.p) + glm::vec3(std::abs(poly.d)));
     s.ng = s.ns = poly.normal;
     s.material = poly.material;
   }

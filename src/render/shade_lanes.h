@@ -14,7 +14,7 @@
 #include <limits>
 #include <xsimd/xsimd.hpp>
 
-#include "render/rounding.h"
+#include "core/rounding.h"
 
 namespace volley::render {
 
@@ -138,7 +138,8 @@ template <class Arch>
 void ShadeLanes<Arch>::surfaces(float* rows, std::size_t stride, std::size_t count) {
   using namespace shade_lanes_detail;
   using F = B<Arch>;
-  constexpr float kGamma2 = gamma(2), kGamma7 = gamma(7), kGamma8 = gamma(8);
+  constexpr float kGamma2 = core::rounding_gamma(2), kGamma7 = core::rounding_gamma(7);
+  constexpr float kGamma8 = core::rounding_gamma(8);
   for (std::size_t i = 0; i < count; i += F::size) {
     // render::hit_point.
     const V3<Arch> a = load3<Arch>(rows, stride, kP0X, i), b = load3<Arch>(rows, stride, kP1X, i),

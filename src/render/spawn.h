@@ -11,7 +11,7 @@
 
 #include <glm/glm.hpp>
 
-#include "render/rounding.h"
+#include "core/rounding.h"
 #include "volley/ray.h"
 
 namespace volley::render {
@@ -24,9 +24,9 @@ inline glm::vec3 hit_point(const glm::vec3& p0, const glm::vec3& p1, const glm::
                            glm::vec3& error) {
   const float b0 = 1.0f - u - v;
   const glm::vec3 p = b0 * p0 + u * p1 + v * p2;
-  error = gamma(7) * (glm::abs(b0 * p0) + glm::abs(u * p1) + glm::abs(v * p2));
+  error = core::rounding_gamma(7) * (glm::abs(b0 * p0) + glm::abs(u * p1) + glm::abs(v * p2));
   const glm::vec3 reach = glm::max(glm::abs(p0 - p), glm::max(glm::abs(p1 - p), glm::abs(p2 - p)));
-  error += glm::vec3(gamma(8) * std::max(reach.x, std::max(reach.y, reach.z)));
+  error += glm::vec3(core::rounding_gamma(8) * std::max(reach.x, std::max(reach.y, reach.z)));
   return p;
 }
 
@@ -48,7 +48,7 @@ inline glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& p_error, con
   // through 0 (a floor at y = 0) has an exactly zero bound along its normal, yet the ray
   // test still rounds in terms of the other coordinates and would find t = 0 on it.
   const glm::vec3 a = glm::abs(p);
-  const glm::vec3 err = p_error + glm::vec3(gamma(2) * std::max(a.x, std::max(a.y, a.z)));
+  const glm::vec3 err = p_error + glm::vec3(core::rounding_gamma(2) * std::max(a.x, std::max(a.y, a.z)));
   const float side = glm::dot(w, n) < 0.0f ? -1.0f : 1.0f;
   const glm::vec3 offset = side * glm::dot(glm::abs(n), err) * n;
   glm::vec3 po = p + offset;
