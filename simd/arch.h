@@ -2,6 +2,7 @@
 // Safe to include from baseline code: it names the tags and never instantiates a batch.
 #pragma once
 #include <cstddef>
+#include <type_traits>
 
 #include <xsimd/xsimd.hpp>
 
@@ -16,6 +17,15 @@ using Sse42 = xsimd::sse4_2;
 using Avx2 = xsimd::fma3<xsimd::avx2>;
 /// AVX-512 F/DQ/BW/VL kernels (16 float lanes); built into isa_avx512.cpp only.
 using Avx512 = xsimd::avx512bw;
+/// AVX-512 kernels on 8 float lanes (ymm registers; the compiler may use AVX-512VL
+/// encodings and 32 registers): one ray against the 8-triangle blocks of an AVX-512 wide
+/// BVH, whose leaves are sized for 8 (narrower leaves were measured 3-10% faster for shadow
+/// rays than 16-triangle ones; perf/embree.md). xsimd treats it as AVX2 + FMA; a tag of its
+/// own keeps its symbols apart from isa_avx2.cpp's (STYLE rule 2). Built into
+/// isa_avx512.cpp only.
+struct Avx512Ymm : xsimd::fma3<xsimd::avx2> {
+  static constexpr char const* name() noexcept { return "avx512ymm"; }
+};
 
 /// Float lanes of `Arch`. Equal to xsimd::batch<float, Arch>::size (asserted where the
 /// kernels are instantiated), but computable in baseline code where batch<float, Avx2>
@@ -28,6 +38,31 @@ inline constexpr int kMaxLanes = 16;
 
 /// The Isa enumerator of an arch tag (for labels and tests).
 template <class Arch>
-inline constexpr Isa kIsaOf = kLanes<Arch> == 4 ? Isa::sse42 : kLanes<Arch> == 8 ? Isa::avx2 : Isa::avx512;
+inline constexpr Isa kIsaOf = std::is_same_v<Arch, Avx512Ymm> ? Isa::avx512
+                              : kLanes<Arch> == 4             ? Isa::sse42
+                              : kLanes<Arch> == 8             ? Isa::avx2
+                                                              : Isa::avx512;
+
+/// The arch of the single-ray leaf kernels of Arch's wide BVH, whose lanes are its block
+/// width: Arch itself, except AVX-512, whose leaves hold blocks of 8 (Avx512Ymm) while its
+/// packets keep 16 lanes.
+template <class Arch>
+struct SingleRayArchT {
+  using type = Arch;
+};
+template <>
+struct SingleRayArchT<Avx512> {
+  using type = Avx512Ymm;
+};
+template <class Arch>
+using SingleRayArch = typename SingleRayArchT<Arch>::type;
 
 }  // namespace volley::simd
+
+// xsimd's registers for the Avx512Ymm tag: those of AVX2 + FMA, declared only where the
+// AVX-512 kernels are compiled (elsewhere the tag is only named, never instantiated).
+#if XSIMD_WITH_AVX512BW
+namespace xsimd::types {
+XSIMD_DECLARE_SIMD_REGISTER_ALIAS(volley::simd::Avx512Ymm, fma3<avx2>);
+}  // namespace xsimd::types
+#endif

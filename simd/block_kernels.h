@@ -94,12 +94,13 @@ struct RayBlockKernels {
   static bool occluded(const PreparedRay& ray, const Block* blocks, std::uint32_t count);
 };
 
-/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles. The packet is
-/// prepared once (prepare) and then reused for every call. Only lanes whose `active` bit
-/// is set are tested and written.
-template <class Arch, TriangleTest Test, int K>
+/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles in blocks of BW
+/// (the lane count, except on AVX-512, whose wide BVH stores blocks of 8: SingleRayArch).
+/// The packet is prepared once (prepare) and then reused for every call. Only lanes whose
+/// `active` bit is set are tested and written.
+template <class Arch, TriangleTest Test, int K, int BW = kLanes<Arch>>
 struct PacketKernels {
-  static constexpr int W = kLanes<Arch>;
+  static constexpr int W = BW;
   static constexpr int L = kLanes<Arch>;
   static_assert(K % L == 0, "K rays per packet must be a multiple of the lane count");
   using Block = BlockFor<Test, W>;
@@ -216,13 +217,13 @@ bool RayBlockKernels<Arch, Test>::occluded(const PreparedRay& ray, const Block* 
   }
 }
 
-template <class Arch, TriangleTest Test, int K>
-void PacketKernels<Arch, Test, K>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
   detail::TestOf<Arch, Test>::template prepare<K>(rays, out);
 }
 
-template <class Arch, TriangleTest Test, int K>
-void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, const Block* blocks, std::uint32_t count,
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepared, const Block* blocks, std::uint32_t count,
                                              HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
@@ -270,8 +271,8 @@ void PacketKernels<Arch, Test, K>::intersect(const PreparedPacket<K>& prepared, 
   }
 }
 
-template <class Arch, TriangleTest Test, int K>
-void PacketKernels<Arch, Test, K>::intersect_triangle(const PreparedPacket<K>& prepared, const Block& block, int j,
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K>& prepared, const Block& block, int j,
                                                       HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
@@ -301,8 +302,8 @@ void PacketKernels<Arch, Test, K>::intersect_triangle(const PreparedPacket<K>& p
   }
 }
 
-template <class Arch, TriangleTest Test, int K>
-std::uint32_t PacketKernels<Arch, Test, K>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
+template <class Arch, TriangleTest Test, int K, int BW>
+std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
                                                      std::uint32_t count, std::uint32_t active) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
@@ -377,5 +378,18 @@ extern template struct RayBlockKernels<Avx512, TriangleTest::watertight>;
 extern template struct PacketKernels<Avx512, TriangleTest::moller, 16>;
 extern template struct PacketKernels<Avx512, TriangleTest::plane, 16>;
 extern template struct PacketKernels<Avx512, TriangleTest::watertight, 16>;
+extern template struct PacketKernels<Avx512, TriangleTest::moller, 16, 8>;
+extern template struct PacketKernels<Avx512, TriangleTest::plane, 16, 8>;
+extern template struct PacketKernels<Avx512, TriangleTest::watertight, 16, 8>;
+
+extern template struct RayBlockKernels<Avx512Ymm, TriangleTest::moller>;
+extern template struct RayBlockKernels<Avx512Ymm, TriangleTest::plane>;
+extern template struct RayBlockKernels<Avx512Ymm, TriangleTest::watertight>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::moller, 8>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::moller, 16>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::plane, 8>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::plane, 16>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::watertight, 8>;
+extern template struct PacketKernels<Avx512Ymm, TriangleTest::watertight, 16>;
 
 }  // namespace volley::simd

@@ -15,7 +15,8 @@
 # name, in its demangled form, at least one xsimd arch tag of that object's ISA group:
 #   sse42:  xsimd::sse2 sse3 ssse3 sse4_1 sse4_2
 #   avx2:   xsimd::avx avx2 fma3<xsimd::avx2>
-#   avx512: xsimd::avx512f avx512cd avx512dq avx512bw
+#   avx512: xsimd::avx512f avx512cd avx512dq avx512bw, volley::simd::Avx512Ymm (arch.h: AVX-512
+#           on 8 lanes, an AVX2 tag to xsimd but instantiated in the AVX-512 objects only)
 # The groups are disjoint, so a tagged symbol of one object can never be emitted by another
 # per-ISA object, nor by baseline code (which never instantiates a kernel: extern templates).
 # Data symbols (V, u, D, B, R) hold no instructions and are not checked.
@@ -43,7 +44,7 @@ for obj in "$@"; do
   case $this in
     sse42) tags='xsimd::(sse2|sse3|ssse3|sse4_1|sse4_2)\b' ;;
     avx2) tags='xsimd::(avx|avx2)\b|xsimd::fma3<xsimd::avx2>' ;;
-    avx512) tags='xsimd::avx512(f|cd|dq|bw)\b' ;;
+    avx512) tags='xsimd::avx512(f|cd|dq|bw)\b|volley::simd::Avx512Ymm\b' ;;
     *) echo "unknown ISA '$this'" >&2; exit 2 ;;
   esac
   [ -r "$obj" ] || { echo "$obj: not readable" >&2; exit 2; }

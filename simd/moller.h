@@ -55,7 +55,9 @@ struct MollerTest {
   template <int K>
   [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
-  [[gnu::always_inline]] inline static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
+  template <int BW>
+  [[gnu::always_inline]] inline static Tris broadcast_tri(const MollerBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
@@ -110,7 +112,8 @@ auto MollerTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {
 }
 
 template <class Arch>
-auto MollerTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris {
+template <int BW>
+auto MollerTest<Arch>::broadcast_tri(const MollerBlock<BW>& b, int j, const Rays&) -> Tris {
   return {B(b.v0[0][j]), B(b.v0[1][j]), B(b.v0[2][j]), B(b.e1[0][j]), B(b.e1[1][j]), B(b.e1[2][j]),
           B(b.ne2[0][j]), B(b.ne2[1][j]), B(b.ne2[2][j]), B(b.n[0][j]),  B(b.n[1][j]),  B(b.n[2][j])};
 }

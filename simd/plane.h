@@ -40,7 +40,9 @@ struct PlaneTest {
   template <int K>
   [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
-  [[gnu::always_inline]] inline static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
+  template <int BW>
+  [[gnu::always_inline]] inline static Tris broadcast_tri(const PlaneBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
@@ -73,7 +75,8 @@ auto PlaneTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {
 }
 
 template <class Arch>
-auto PlaneTest<Arch>::broadcast_tri(const Block& b, int j, const Rays&) -> Tris {
+template <int BW>
+auto PlaneTest<Arch>::broadcast_tri(const PlaneBlock<BW>& b, int j, const Rays&) -> Tris {
   return {B(b.v0[0][j]), B(b.v0[1][j]), B(b.v0[2][j]), B(b.n[0][j]),  B(b.n[1][j]),  B(b.n[2][j]),
           B(b.n1[0][j]), B(b.n1[1][j]), B(b.n1[2][j]), B(b.n2[0][j]), B(b.n2[1][j]), B(b.n2[2][j])};
 }

@@ -87,7 +87,9 @@ struct WatertightTest {
   template <int K>
   [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
-  [[gnu::always_inline]] inline static Tris broadcast_tri(const Block& b, int j, const Rays& r);
+  /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
+  template <int BW>
+  [[gnu::always_inline]] inline static Tris broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
@@ -254,7 +256,8 @@ auto WatertightTest<Arch>::load_block(const Block& b, const Rays& r) -> Tris {
 }
 
 template <class Arch>
-auto WatertightTest<Arch>::broadcast_tri(const Block& b, int j, const Rays& r) -> Tris {
+template <int BW>
+auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
   if (r.uniform) {
     const int kx = r.kx, ky = r.ky, kz = r.kz;
     return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,

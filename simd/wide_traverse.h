@@ -72,7 +72,8 @@ struct WideView {
 };
 
 /// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
-/// W = kLanes<Arch> triangles. Robust = false drops the exit padding (kSlabExitPad) from
+/// W = kLanes<SingleRayArch<Arch>> triangles (8 on AVX-512, whose packets still run 16
+/// lanes: single rays were faster on 8-triangle leaves, packets no slower). Robust = false drops the exit padding (kSlabExitPad) from
 /// the box test and the stack pruning (Options::robust = false, the fast path; the NaN-safe
 /// operand order stays, it costs nothing); its answers may differ from the oracle's where a
 /// ray grazes a box (the mutation test in tests/accel shows it). All functions are
@@ -91,7 +92,9 @@ struct WideKernels {
   static constexpr int N = kWideN;
   static constexpr int L = kLanes<Arch>;
   static constexpr int K = kWidePacket;
-  static constexpr int W = kLanes<Arch>;
+  /// The single-ray leaf kernels' arch; its lanes are the block width (8 on AVX-512).
+  using SingleArch = SingleRayArch<Arch>;
+  static constexpr int W = kLanes<SingleArch>;
   using Block = BlockFor<Test, W>;
   using View = WideView<Block>;
 
@@ -286,7 +289,7 @@ template <bool AnyHit, bool NoZero>
 bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, float inv[3], std::uint32_t start,
                                            Hit& hit) {
   using V8 = detail::Lanes8<Arch>;
-  using Leaf = RayBlockKernels<Arch, Test>;
+  using Leaf = RayBlockKernels<SingleArch, Test>;
   static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;
   // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
@@ -432,7 +435,7 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket
   detail::PacketSetup<K> setup;
   screen(prep.rays, setup);
   if (setup.valid == 0) return;
-  PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
+  PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
   if (setup.uniform == 3)
     trace_frustum<false>(bvh, prep, setup, hits);
   else if (setup.uniform != 0)
@@ -449,7 +452,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
   detail::PacketSetup<K> setup;
   screen(prep.rays, setup);
   if (setup.valid == 0) return 0;
-  PacketKernels<Arch, Test, K>::prepare(prep.rays, prep);
+  PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
   HitPacket<K> unused;
   if (setup.uniform == 3) return trace_frustum<true>(bvh, prep, setup, unused);
   return setup.uniform != 0 ? trace_packet<true, true>(bvh, prep, setup, unused)
@@ -506,16 +509,16 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
 
 template <class Arch, TriangleTest Test, bool Robust>
 int WideKernels<Arch, Test, Robust>::used_lanes(const Block& block) {
-  using I = detail::IntB<Arch>;
+  using I = detail::IntB<SingleArch>;
   const I ids = I::load_aligned(reinterpret_cast<const std::int32_t*>(block.prim));
   const auto used = xsimd::bool_cast(ids != I(static_cast<std::int32_t>(kInvalidPrim)));
-  return std::popcount(detail::bits_from_mask<Arch>(used));
+  return std::popcount(detail::bits_from_mask<SingleArch>(used));
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks,
                                                      std::uint32_t count, HitPacket<K>& hits) {
-  using LeafPacket = PacketKernels<Arch, Test, K>;
+  using LeafPacket = PacketKernels<Arch, Test, K, W>;
   const Block& last = blocks[count - 1];
   const int used = used_lanes(last);
   if (used > W / 2) return LeafPacket::intersect(prep, blocks, count, hits);
@@ -526,7 +529,7 @@ void WideKernels<Arch, Test, Robust>::leaf_intersect(const PreparedPacket<K>& pr
 template <class Arch, TriangleTest Test, bool Robust>
 std::uint32_t WideKernels<Arch, Test, Robust>::leaf_occluded(PreparedPacket<K>& prep, const Block* blocks,
                                                              std::uint32_t count, std::uint32_t lanes) {
-  using LeafPacket = PacketKernels<Arch, Test, K>;
+  using LeafPacket = PacketKernels<Arch, Test, K, W>;
   const Block& last = blocks[count - 1];
   const int used = used_lanes(last);
   if (used > W / 2) return LeafPacket::occluded(prep, blocks, count, lanes);

@@ -32,14 +32,16 @@ core::RayT<float> to_core(const Ray& r) {
 /// single and packet (Mrays/s within noise of the best while the blocks fill up):
 ///   W = 16: cost 0.15 (0.25: +7% packet speed, +50% memory; 0.1: -20% packets);
 ///   W = 4, 8: cost 0.25 (1.0 with leaves of at most W: +5% speed, twice the memory).
+/// W >= 8: an empty block slot priced at 0.4 triangle tests fills the blocks (perf/build.md):
+///   W = 16: 57-62% -> 71-83% of lanes (Sponza 79 -> 63 bytes/triangle, packets 0..-3%;
+///   1.0: 80%, but packets -10..-55%); W = 8 (AVX2, and AVX-512 since its leaves hold
+///   blocks of 8): Sponza 64% -> 79%, 72 -> 59 bytes/triangle, Embree ratios within
+///   +-2.5% (AVX2, perf/embree.md).
 core::BvhBuildOptions wide_build_options(int w) {
   core::BvhBuildOptions o;
   o.max_leaf_size = 16;
   o.intersection_cost = w >= 16 ? 0.15f : 0.25f;
-  // W = 16: an empty block slot priced at 0.4 triangle tests fills blocks 57-62% -> 71-83%
-  // (Sponza 79 -> 63 bytes/triangle, packets 0..-3%; 1.0: 80%, but packets -10..-55%).
-  // perf/build.md has the measurements.
-  if (w >= 16) {
+  if (w >= 8) {
     o.leaf_block_width = w;
     o.padding_cost = 0.4f;
   }

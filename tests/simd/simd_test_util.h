@@ -27,6 +27,7 @@
 TYPE_TO_STRING(volley::simd::Sse42);
 TYPE_TO_STRING(volley::simd::Avx2);
 TYPE_TO_STRING(volley::simd::Avx512);
+TYPE_TO_STRING(volley::simd::Avx512Ymm);
 
 namespace simd_test {
 

@@ -140,19 +140,19 @@ void all_forms(unsigned seed) {
 }  // namespace
 
 TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: moller", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512) {
+                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::moller>(11);
 }
 
 TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: plane", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512) {
+                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::plane>(22);
 }
 
 TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: watertight", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512) {
+                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::watertight>(33);
 }
@@ -172,7 +172,8 @@ constexpr bool fuses_by_the_rule() {
          kMollerFused<Arch> == volley::core::moller_fused_for(volley::simd::kIsaOf<Arch>);
 }
 static_assert(fuses_by_the_rule<volley::simd::Sse42>() && fuses_by_the_rule<volley::simd::Avx2>() &&
-                  fuses_by_the_rule<volley::simd::Avx512>(),
+                  fuses_by_the_rule<volley::simd::Avx512>() &&
+                  fuses_by_the_rule<volley::simd::Avx512Ymm>(),
               "the Moller kernels fuse where the ISA has FMA, and the oracle's variant for each ISA must match");
 static_assert(!volley::simd::detail::kHasFma<volley::simd::Sse42> &&
                   volley::simd::detail::kHasFma<volley::simd::Avx2> &&

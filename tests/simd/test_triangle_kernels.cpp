@@ -84,6 +84,7 @@ void facade_agrees(TriangleTest test) {
 
 }  // namespace
 
+// (The facade picks kernels by Isa, so Avx512Ymm, an Isa::avx512 arch, has no facade of its own.)
 TEST_CASE_TEMPLATE("TriangleKernels facade agrees with the oracle per group", Arch, volley::simd::Sse42,
                    volley::simd::Avx2, volley::simd::Avx512) {
   if (skip_isa<Arch>()) return;

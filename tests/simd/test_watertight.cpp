@@ -88,7 +88,7 @@ Leaks count_leaks(const Soup& soup, const std::vector<Ray>& rays) {
 }  // namespace
 
 TEST_CASE_TEMPLATE("watertight kernel: no leaks at shared vertices and edges of closed meshes", Arch,
-                   volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512) {
+                   volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
   if (skip_isa<Arch>()) return;
   for (float offset : {0.0f, 1e3f, 1e5f, 1e6f}) {
     const int n = 4;
@@ -107,7 +107,7 @@ TEST_CASE_TEMPLATE("watertight kernel: no leaks at shared vertices and edges of 
 }
 
 TEST_CASE_TEMPLATE("watertight kernel: axis-aligned rays on an integer heightfield never miss, fallback counted",
-                   Arch, volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512) {
+                   Arch, volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
   if (skip_isa<Arch>()) return;
   // Heightfield over [0, 8]^2 with integer heights; quads split on alternating diagonals.
   const int n = 8;
