@@ -16,8 +16,10 @@
 // Inert children (lo = +inf, hi = -inf) fail for every ray.
 // One exception, the single-ray walk: its far distances are (plane - org) * fl(inv * pad),
 // the padding folded into the reciprocal once per ray (same rounding bound, one multiply
-// less per node; see walk). It may differ from the oracle by an ulp on a box's exit, never
-// by culling a box the exact ray meets; the triangle answers are the same.
+// less per node), and with FMA (AVX2, AVX-512) and no zero direction component each slab
+// distance is one fused plane * inv - c, c = org * inv widened outwards once per ray (see
+// walk). Its boxes may differ from the oracle's by an ulp or two, never by culling a box
+// the exact ray meets; the triangle answers are the same.
 #pragma once
 #include <immintrin.h>
 
@@ -167,6 +169,10 @@ struct Lanes8<Arch, true> {
   static V set1(float x) { return _mm256_set1_ps(x); }
   static V sub(V a, V b) { return _mm256_sub_ps(a, b); }
   static V mul(V a, V b) { return _mm256_mul_ps(a, b); }
+  /// The ISA has FMA (AVX2 + FMA, AVX-512): slab distances in one rounding (walk).
+  static constexpr bool kFma = true;
+  /// a b - c, rounded once.
+  static V fmsub(V a, V b, V c) { return _mm256_fmsub_ps(a, b, c); }
   /// maxps(a, b): b when either is NaN.
   static V max(V a, V b) { return _mm256_max_ps(a, b); }
   /// minps(a, b): b when either is NaN.
@@ -187,6 +193,7 @@ struct Lanes8<Arch, false> {
   static V set1(float x) { return {_mm_set1_ps(x), _mm_set1_ps(x)}; }
   static V sub(V x, V y) { return {_mm_sub_ps(x.a, y.a), _mm_sub_ps(x.b, y.b)}; }
   static V mul(V x, V y) { return {_mm_mul_ps(x.a, y.a), _mm_mul_ps(x.b, y.b)}; }
+  static constexpr bool kFma = false;
   static V max(V x, V y) { return {_mm_max_ps(x.a, y.a), _mm_max_ps(x.b, y.b)}; }
   static V min(V x, V y) { return {_mm_min_ps(x.a, y.a), _mm_min_ps(x.b, y.b)}; }
   static std::uint32_t le(V x, V y) {
@@ -308,6 +315,30 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   // both ends (the padding was sized for the sub, reciprocal and product roundings), and
   // the node test loses a multiply from its longest dependency chain. ±inf stays ±inf.
   const auto fix = V8::set1(inv[0] * pad1), fiy = V8::set1(inv[1] * pad1), fiz = V8::set1(inv[2] * pad1);
+  // With FMA and no zero direction component, a slab distance is one fused operation,
+  // b inv - c, where c is org inv rounded outwards (up for near planes, down for far ones)
+  // once per ray. Against (b - org) inv that moves near
+  // distances down and far ones up by at most an ulp of org inv, and rounds once instead of
+  // twice, so the padding that covers the two-rounding form covers it (never culls a box
+  // the exact ray meets). NaN (inf - inf, only for a subnormal direction component, whose
+  // reciprocal overflows) is dropped by max/min as in the other form.
+  constexpr bool kFused = NoZero && V8::kFma;
+  typename V8::V cnx{}, cny{}, cnz{}, cfx{}, cfy{}, cfz{};
+  if constexpr (kFused) {
+    // c = p +- (|p| 2^-22 + 2^-149) with p = fl(org inv): p is within 2^-24 |org inv| of the
+    // exact product (2^-150 if subnormal), so the widened c lies beyond it even after its
+    // own rounding. Three lanes at once; an infinite p gives +inf or NaN, both harmless.
+    const __m128 org = _mm_loadu_ps(ray.org), sign = _mm_set1_ps(-0.0f);
+    // (Robust = false: c = p, no widening, as it has no padding.)
+    const __m128 rel = _mm_set1_ps(Robust ? 0x1p-22f : 0.0f), tiny = _mm_set1_ps(Robust ? 0x1p-149f : 0.0f);
+    const __m128 pn = _mm_mul_ps(org, _mm_loadu_ps(inv));
+    const __m128 pf = _mm_mul_ps(org, _mm_mul_ps(_mm_loadu_ps(inv), _mm_set1_ps(pad1)));
+    alignas(16) float cn[4], cf[4];
+    _mm_store_ps(cn, _mm_add_ps(pn, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pn), rel), tiny)));
+    _mm_store_ps(cf, _mm_sub_ps(pf, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pf), rel), tiny)));
+    cnx = V8::set1(cn[0]), cny = V8::set1(cn[1]), cnz = V8::set1(cn[2]);
+    cfx = V8::set1(cf[0]), cfy = V8::set1(cf[1]), cfz = V8::set1(cf[2]);
+  }
 
   // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
   float tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
@@ -325,12 +356,22 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
       // The child references sit on the node's fourth cache line, read only after the slab
       // test: request it now, beside the three lines of boxes.
       _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);
-      const auto tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
-      const auto tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
-      const auto tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
-      const auto tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), fix);
-      const auto tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), fiy);
-      const auto tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), fiz);
+      typename V8::V tnx, tny, tnz, tfx, tfy, tfz;
+      if constexpr (kFused) {
+        tnx = V8::fmsub(V8::load(node.bounds[nx]), ix, cnx);
+        tny = V8::fmsub(V8::load(node.bounds[ny]), iy, cny);
+        tnz = V8::fmsub(V8::load(node.bounds[nz]), iz, cnz);
+        tfx = V8::fmsub(V8::load(node.bounds[fx]), fix, cfx);
+        tfy = V8::fmsub(V8::load(node.bounds[fy]), fiy, cfy);
+        tfz = V8::fmsub(V8::load(node.bounds[fz]), fiz, cfz);
+      } else {
+        tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
+        tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
+        tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
+        tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), fix);
+        tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), fiy);
+        tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), fiz);
+      }
       typename V8::V entry, exit;
       if constexpr (NoZero) {
         // No NaN distance: combine as a tree.
