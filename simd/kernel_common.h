@@ -149,6 +149,16 @@ FloatB<Arch> fused_mul_sub(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
     return _mm256_fmsub_ps(a, b, c);
 }
 
+/// c - a b rounded once, as std::fma(-a, b, c).
+template <class Arch>
+FloatB<Arch> fused_neg_mul_add(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
+  static_assert(kHasFma<Arch>, "no FMA instruction on this ISA: compute unfused (see kMollerFused)");
+  if constexpr (kLanes<Arch> == 16)
+    return _mm512_fnmadd_ps(a, b, c);
+  else
+    return _mm256_fnmadd_ps(a, b, c);
+}
+
 /// Reinterprets 32-bit ids as float lanes (so that select() can carry them with t, u, v).
 template <class Arch>
 FloatB<Arch> load_ids(const std::uint32_t* ids) {

@@ -1,11 +1,13 @@
 // Watertight ray/triangle test (Woop, Benthin & Wald 2013, "Watertight Ray/Triangle
 // Intersection", JCGT 2(1)) on float lanes. The SIMD twin of
 // src/core/triangle_watertight.h: the same float operations in the same order, so every
-// lane gives the oracle's hit/miss and t, u, v bit for bit.
+// lane gives the hit/miss and t, u, v of the oracle's variant for its ISA bit for bit
+// (core::watertight_fused_for: the shear and the depth sum fuse where the ISA has FMA).
 //
 // Watertightness needs the edge functions a*b - c*d with both products rounded: the
 // per-ISA files are compiled with -ffp-contract=off and xsimd's operators map to plain
-// multiply and subtract instructions, so nothing is fused even where FMA is enabled
+// multiply and subtract instructions, so the edge functions never fuse; the only fused
+// operations are the explicit ones (kFused), per vertex, which cannot open a crack
 // (tests/simd/test_watertight.cpp checks it on closed meshes with the shipped flags).
 // A lane whose float edge function is exactly 0 is recomputed in double (exact products),
 // one lane at a time; watertight_fallback_lanes counts them.
@@ -127,6 +129,23 @@ struct WatertightTest {
   /// oracle's final test.
   [[gnu::always_inline]] inline static M confirm(const Rays& r, const Cand& c, B t, B upper) {
     return and_cmp<Cmp::lt, Arch>(and_cmp<Cmp::le, Arch>(c.valid, r.tmin, t), t, upper);
+  }
+  /// Whether this ISA's lanes fuse the shear and the depth sum (core::watertight_fused_for:
+  /// where the ISA has FMA); the edge functions never fuse.
+  static constexpr bool kFused = kHasFma<Arch>;
+  /// A sheared coordinate, p - s z.
+  [[gnu::always_inline]] inline static B shear(B p, B s, B z) {
+    if constexpr (kFused)
+      return fused_neg_mul_add<Arch>(s, z, p);
+    else
+      return p - s * z;
+  }
+  /// The scaled distance U az + V bz + W cz.
+  [[gnu::always_inline]] inline static B depth_sum(const Edges& e, B az, B bz, B cz) {
+    if constexpr (kFused)
+      return fused_mul_add<Arch>(e.w, cz, fused_mul_add<Arch>(e.v, bz, e.u * az));
+    else
+      return e.u * az + e.v * bz + e.w * cz;
   }
   /// Recomputes the edge functions of the lanes with a zero one in double (exact
   /// products) and returns all three. Out of line and cold: the test stays small enough
@@ -280,12 +299,12 @@ template <class Arch>
 auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
   const B zero(0.0f);
   // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
-  const B ax = tri.akx - r.sx * tri.akz;
-  const B ay = tri.aky - r.sy * tri.akz;
-  const B bx = tri.bkx - r.sx * tri.bkz;
-  const B by = tri.bky - r.sy * tri.bkz;
-  const B cx = tri.ckx - r.sx * tri.ckz;
-  const B cy = tri.cky - r.sy * tri.ckz;
+  const B ax = shear(tri.akx, r.sx, tri.akz);
+  const B ay = shear(tri.aky, r.sy, tri.akz);
+  const B bx = shear(tri.bkx, r.sx, tri.bkz);
+  const B by = shear(tri.bky, r.sy, tri.bkz);
+  const B cx = shear(tri.ckx, r.sx, tri.ckz);
+  const B cy = shear(tri.cky, r.sy, tri.ckz);
   // Scaled barycentrics: 2D edge functions at the origin, both products rounded.
   Edges e{cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax};
   // Mixed signs: the origin is outside (both facings accepted). With no edge function
@@ -308,7 +327,7 @@ auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
   d.u = e.v, d.v = e.w;
   if (xsimd::none(d.inside)) return d;
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;
-  d.ts = e.u * az + e.v * bz + e.w * cz;
+  d.ts = depth_sum(e, az, bz, cz);
   d.ts_s = d.ts ^ (d.det & B(-0.0f));
   return d;
 }
@@ -317,12 +336,12 @@ template <class Arch>
 auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B zero(0.0f);
   // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
-  const B ax = tri.akx - r.sx * tri.akz;
-  const B ay = tri.aky - r.sy * tri.akz;
-  const B bx = tri.bkx - r.sx * tri.bkz;
-  const B by = tri.bky - r.sy * tri.bkz;
-  const B cx = tri.ckx - r.sx * tri.ckz;
-  const B cy = tri.cky - r.sy * tri.ckz;
+  const B ax = shear(tri.akx, r.sx, tri.akz);
+  const B ay = shear(tri.aky, r.sy, tri.akz);
+  const B bx = shear(tri.bkx, r.sx, tri.bkz);
+  const B by = shear(tri.bky, r.sy, tri.bkz);
+  const B cx = shear(tri.ckx, r.sx, tri.ckz);
+  const B cy = shear(tri.cky, r.sy, tri.ckz);
   // Scaled barycentrics: 2D edge functions at the origin, both products rounded.
   Edges e{cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax};
   // Mixed signs: the origin is outside (both facings accepted). With no edge function
@@ -345,7 +364,7 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   // Scaled distance t det against [tmin, upper] |det| with det's sign folded in: the
   // oracle's prefilter, which never rejects a lane the quotient would accept.
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;
-  const B ts = e.u * az + e.v * bz + e.w * cz;
+  const B ts = depth_sum(e, az, bz, cz);
   const B ts_s = ts ^ (det & B(-0.0f));
   valid = and_cmp<Cmp::le, Arch>(and_cmp<Cmp::ge, Arch>(valid, ts_s, r.tmin_lo * ad), ts_s, upper * ad);
   return {valid, ts, e.v, e.w, det};

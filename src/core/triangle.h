@@ -27,9 +27,9 @@ bool is_degenerate(const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2) {
 /// Runs the chosen test on one ray and one triangle, building its precomputed data
 /// (PlaneTriangle, WoopRay) on the fly. Same contract as the individual tests: both
 /// facings, tmin <= t < tmax, `hit` written only on a hit. `variant_of`: the ISA whose
-/// kernels' answers to reproduce bit for bit (moller fuses on AVX2/AVX-512 only,
-/// moller_fused_for; plane and watertight are the same everywhere); by default the scalar
-/// oracle's. Pure function, thread safe.
+/// kernels' answers to reproduce bit for bit (moller and watertight fuse on AVX2/AVX-512
+/// only, moller_fused_for, watertight_fused_for; plane is the same everywhere); by default
+/// the scalar oracle's. Pure function, thread safe.
 template <class T>
 bool intersect_triangle(volley::TriangleTest test, const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1,
                         const Vec3<T>& p2, TriHit<T>& hit, volley::Isa variant_of = volley::Isa::scalar) {
@@ -40,7 +40,8 @@ bool intersect_triangle(volley::TriangleTest test, const RayT<T>& ray, const Vec
       return moller_fused_for(variant_of) ? intersect_moller<T, true>(ray, p0, p1, p2, hit)
                                           : intersect_moller<T, false>(ray, p0, p1, p2, hit);
     case volley::TriangleTest::watertight:
-      return intersect_watertight(ray, p0, p1, p2, hit);
+      return watertight_fused_for(variant_of) ? intersect_watertight<T, true>(ray, p0, p1, p2, hit)
+                                              : intersect_watertight<T, false>(ray, p0, p1, p2, hit);
   }
   return false;
 }

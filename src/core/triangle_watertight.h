@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/geometry.h"
+#include "core/triangle_moller.h"
 
 namespace volley::core {
 
@@ -31,6 +32,13 @@ constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
                    : -kInf;
   return {lo, hi};
 }
+
+/// Whether the watertight kernels of `isa` fuse (intersect_watertight's `Fused`): the same
+/// rule as moller_fused_for, FMA where the ISA has the instruction (AVX2, AVX-512). Only the
+/// shear and the depth sum fuse; the edge functions never do (watertightness needs both of
+/// their products rounded), so every variant is watertight, but the variants may differ in
+/// t by an ulp and on which of two triangles a ray through their shared edge hits.
+constexpr bool watertight_fused_for(volley::Isa isa) { return moller_fused_for(isa); }
 
 /// Per-ray constants of the watertight test: an axis permutation and a shear that map the
 /// ray onto the unit +z axis from the origin. 24 bytes for float.
@@ -72,8 +80,11 @@ WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
 /// sign of each edge function is exact for the sheared vertices (float: recomputed in double
 /// when one is 0), so triangles sharing an edge see exactly opposite edge functions.
 /// Requires exact products (no FMA contraction): the project builds with -ffp-contract=off.
+/// `Fused`: the shear a[kx] - sx a[kz] and the depth sum U az + V bz + W cz rounded once per
+/// product-and-add (std::fma), as the AVX2 and AVX-512 kernels compute them
+/// (watertight_fused_for); each vertex is still sheared by itself, so nothing cracks.
 /// Pure function, thread safe.
-template <class T>
+template <class T, bool Fused = false>
 bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>& p0,
                           const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
   // Zero-area triangle: no hit (as pbrt-v4). Its sheared vertices are collinear only up to
@@ -89,12 +100,13 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
   const Vec3<T> c = p2 - ray.org;
 
   // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
-  const T ax = a[w.kx] - w.sx * a[w.kz];
-  const T ay = a[w.ky] - w.sy * a[w.kz];
-  const T bx = b[w.kx] - w.sx * b[w.kz];
-  const T by = b[w.ky] - w.sy * b[w.kz];
-  const T cx = c[w.kx] - w.sx * c[w.kz];
-  const T cy = c[w.ky] - w.sy * c[w.kz];
+  using moller_detail::mul_add;
+  const T ax = mul_add<Fused>(-w.sx, a[w.kz], a[w.kx]);
+  const T ay = mul_add<Fused>(-w.sy, a[w.kz], a[w.ky]);
+  const T bx = mul_add<Fused>(-w.sx, b[w.kz], b[w.kx]);
+  const T by = mul_add<Fused>(-w.sy, b[w.kz], b[w.ky]);
+  const T cx = mul_add<Fused>(-w.sx, c[w.kz], c[w.kx]);
+  const T cy = mul_add<Fused>(-w.sy, c[w.kz], c[w.ky]);
 
   // Scaled barycentrics: 2D edge functions at the origin. Plain a*b - c*d on purpose: with
   // -ffp-contract=off both products round, so the triangle across an edge computes exactly
@@ -133,7 +145,7 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
   const T az = w.sz * a[w.kz];
   const T bz = w.sz * b[w.kz];
   const T cz = w.sz * c[w.kz];
-  const T t_scaled = eu * az + ev * bz + ew * cz;
+  const T t_scaled = mul_add<Fused>(ew, cz, mul_add<Fused>(ev, bz, eu * az));
   const T sign = det < 0 ? T(-1) : T(1);
   const T ad = det * sign;
   const T tmin_lo = ray.tmin - std::abs(ray.tmin) * kScaledPad<T>;
@@ -149,10 +161,10 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
 }
 
 /// As above, computing the ray's shear constants on the fly.
-template <class T>
+template <class T, bool Fused = false>
 bool intersect_watertight(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1,
                           const Vec3<T>& p2, TriHit<T>& hit) {
-  return intersect_watertight(ray, make_woop_ray(ray.dir), p0, p1, p2, hit);
+  return intersect_watertight<T, Fused>(ray, make_woop_ray(ray.dir), p0, p1, p2, hit);
 }
 
 }  // namespace volley::core

@@ -52,7 +52,9 @@ struct Case {
 
 /// Random triangles hit near their centroid, scaled by `scale` (coordinates) and `dscale`
 /// (direction: t scales by 1 / dscale). Scales near 1e-20 make det and upper |det| subnormal.
-std::vector<Case> cases(unsigned seed, float scale, float dscale, int n) {
+/// `fused`: t by the oracle's fused variant (core::watertight_fused_for), as the FMA ISAs'
+/// kernels compute it.
+std::vector<Case> cases(unsigned seed, float scale, float dscale, int n, bool fused = false) {
   Generator g(seed);
   std::vector<Case> out;  // fewer than n when the scale leaves few hits (checked by the callers)
   for (int tries = 0; tries < 50 * n && static_cast<int>(out.size()) < n; ++tries) {
@@ -63,7 +65,9 @@ std::vector<Case> cases(unsigned seed, float scale, float dscale, int n) {
     const V3 dir = (target - org) * dscale;
     const RayF r{org, -kInf, dir, kInf};
     volley::core::TriHit<float> h;
-    if (!volley::core::intersect_watertight(r, p0, p1, p2, h) || !(h.t > 0) || !std::isfinite(h.t)) continue;
+    const bool hit = fused ? volley::core::intersect_watertight<float, true>(r, p0, p1, p2, h)
+                           : volley::core::intersect_watertight<float, false>(r, p0, p1, p2, h);
+    if (!hit || !(h.t > 0) || !std::isfinite(h.t)) continue;
     out.push_back({Ray{{org.x, org.y, org.z}, 0.0f, {dir.x, dir.y, dir.z}, kInf}, p0, p1, p2, h.t});
   }
   return out;
@@ -126,7 +130,7 @@ void kernels_pin() {
   Agreement single, any, packet, packet_any;
   for (float scale : {1.0f, 1e-19f, 1e-20f, 1e-21f, 1e15f})
     for (float dscale : {1.0f, 1e-6f, 1e6f})
-      for (const Case& c : cases(29, scale, dscale, 60)) {
+      for (const Case& c : cases(29, scale, dscale, 60, volley::core::watertight_fused_for(volley::simd::kIsaOf<Arch>))) {
         // The triangle alone in a block, and at the last lane of a full one whose other
         // triangles are far off the ray.
         Soup alone, last;

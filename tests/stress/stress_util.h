@@ -18,6 +18,7 @@
 #include "accuracy/query_modes.h"
 #include "accuracy/reference.h"
 #include "core/triangle_moller.h"
+#include "core/triangle_watertight.h"
 #include "volley/accel.h"
 #include "volley/packet.h"
 
@@ -58,17 +59,19 @@ inline const std::vector<Isa>& isas() {
   return list;
 }
 
-/// Item 13 compares hit/miss across the ISAs of one formulation group: plane and watertight
-/// compute the same everywhere (group 0), moller fuses on AVX2/AVX-512 (group 1) but not in
-/// the scalar oracle and SSE4.2 (group 0), and the two formulations may differ on hit/miss
+/// Item 13 compares hit/miss across the ISAs of one formulation group: plane computes the
+/// same everywhere (group 0), moller and watertight fuse on AVX2/AVX-512 (group 1) but not
+/// in the scalar oracle and SSE4.2 (group 0), and the two formulations may differ on hit/miss
 /// for ill-conditioned rays (grazing, rays through shared edges; ACCURACY.md item 13).
 inline int agreement_group(TriangleTest test, Isa isa) {
-  return test == TriangleTest::moller && volley::core::moller_fused_for(isa) ? 1 : 0;
+  if (test == TriangleTest::moller) return volley::core::moller_fused_for(isa) ? 1 : 0;
+  if (test == TriangleTest::watertight) return volley::core::watertight_fused_for(isa) ? 1 : 0;
+  return 0;
 }
 inline constexpr int kAgreementGroups = 2;
 
 /// Whose answers the ISAs of `group` are compared with (for messages).
-inline std::string group_name(int group) { return group == 0 ? "the scalar oracle" : "the first fused-moller ISA"; }
+inline std::string group_name(int group) { return group == 0 ? "the scalar oracle" : "the first fused ISA"; }
 
 inline std::string name(Isa isa) { return std::string(volley::to_string(isa)); }
 inline std::string name(TriangleTest t) { return std::string(volley::to_string(t)); }

@@ -184,7 +184,8 @@ TEST_CASE("stress 12/13: origin exactly on a triangle with tmin = 0 (pinned beha
   }
   for (TriangleTest test : kTests) {
     // Single rays of the first ISA of each agreement group (the scalar oracle, or for fused
-    // moller the first of AVX2, AVX-512): fused t may differ from unfused t in the last bits.
+    // moller and watertight the first of AVX2, AVX-512): fused t may differ from unfused t
+    // in the last bits.
     std::vector<Hit> oracle[kAgreementGroups];
     std::size_t self[3] = {0, 0, 0}, other[3] = {0, 0, 0}, none[3] = {0, 0, 0};
     for (Isa isa : isas())
@@ -197,8 +198,10 @@ TEST_CASE("stress 12/13: origin exactly on a triangle with tmin = 0 (pinned beha
           for (std::size_t i = 0; i < rays.size(); ++i) {
             const Hit& h = a.hits[i];
             if (group == 0) (h.prim == 0 ? self : h.hit() ? other : none)[kind[i]]++;
-            // The groups may differ in t, not in the triangle hit here.
-            if (group != 0)
+            // Moller's groups may differ in t, not in the triangle hit here. Watertight's own
+            // triangle comes back at t within ~3e-6 of 0 with a sign set by rounding (see
+            // below), so there the groups may also differ in which triangle is hit.
+            if (group != 0 && test == TriangleTest::moller)
               CHECK_MESSAGE(h.prim == oracle[0][i].prim, "origin on triangle: fused ", name(test), " ", name(isa),
                             " reports another triangle than the unfused oracle");
             // The own triangle is reported at t = 0 (plane, moller) or within 1e-6 of it.
