@@ -26,6 +26,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "bench_common.h"
@@ -256,9 +257,13 @@ void scalar(benchmark::State& state, bool aimed) {
 
 std::string test_name(TriangleTest t) { return std::string(volley::to_string(t)); }
 
+/// Arch's benchmarks, labelled with its ISA ("avx512ymm": AVX-512 on 8 lanes, the single-ray
+/// leaf kernels of the AVX-512 wide BVH).
 template <class Arch, TriangleTest Test>
 void register_isa() {
-  const std::string isa(volley::to_string(volley::simd::kIsaOf<Arch>));
+  const std::string isa = std::is_same_v<Arch, volley::simd::Avx512Ymm>
+                              ? std::string("avx512ymm")
+                              : std::string(volley::to_string(volley::simd::kIsaOf<Arch>));
   if (!volley::simd::cpu_has(volley::simd::kIsaOf<Arch>)) return;
   for (bool aimed : {true, false}) {
     const std::string suffix = std::string("/") + (aimed ? "aimed" : "random");
@@ -284,6 +289,7 @@ void register_test() {
   register_isa<volley::simd::Sse42, Test>();
   register_isa<volley::simd::Avx2, Test>();
   register_isa<volley::simd::Avx512, Test>();
+  register_isa<volley::simd::Avx512Ymm, Test>();
 }
 
 const bool registered = [] {

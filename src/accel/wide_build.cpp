@@ -213,6 +213,15 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
       kids.push_back(p.binary);
     else
       plan.children(p.binary, kids);
+    // Child order: leaves first, then larger boxes first. Closest-hit traversal sorts the
+    // children it meets by distance, but any hit takes them in this order, and a leaf can end
+    // it at once while a larger box is likelier to hold an occluder: occluded1 +3-7% on
+    // Sponza, conference and kitchen (bunny within noise; closest hit within noise).
+    std::stable_sort(kids.begin(), kids.end(), [&](std::uint32_t x, std::uint32_t y) {
+      const core::BvhNode &a = bvh.nodes[x], &b = bvh.nodes[y];
+      if (a.is_leaf() != b.is_leaf()) return a.is_leaf();
+      return a.box.half_area() > b.box.half_area();
+    });
     // Fill the node: boxes bit for bit, leaves referenced, interior children allocated
     // side by side and queued (the first child on top, so it is laid out next).
     simd::WideNode<N> node = inert_node();
