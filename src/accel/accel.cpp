@@ -31,6 +31,7 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
   const std::uint32_t first = impl_->next_id;
   auto& tris = impl_->triangles;
   tris.reserve(tris.size() + 3 * triangle_count);
+  impl_->triangle_ids.reserve(impl_->triangle_ids.size() + triangle_count);
   for (std::size_t t = 0; t < triangle_count; ++t) {
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t idx = indices[3 * t + k];

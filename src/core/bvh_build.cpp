@@ -42,6 +42,9 @@ using namespace bvh_build_detail;
 // built sequentially (big enough that a task's overhead is noise, small enough that a
 // megatriangle scene makes hundreds of tasks).
 constexpr std::uint32_t kTaskNode = 1u << 12;
+// Nodes this small are binned with at most kSmallNodeBins bins (Splitter::split).
+constexpr std::uint32_t kSmallNode = 64;
+constexpr int kSmallNodeBins = 8;
 // Nodes with at least this many primitives are binned in parallel chunks of kBinChunk.
 constexpr std::uint32_t kParallelBinning = 1u << 15;
 constexpr std::size_t kBinChunk = 1u << 13;
@@ -112,7 +115,11 @@ class Splitter {
     // A node of count < bins primitives gets count bins: at most count of them can be
     // occupied anyway, and clearing and sweeping 3 x bins bins per node would otherwise
     // dominate the build for the many small nodes near the leaves.
-    const int nb = count < static_cast<std::uint32_t>(opt_.bins) ? static_cast<int>(count) : opt_.bins;
+    // Nodes of at most kSmallNode primitives get at most kSmallNodeBins: the bottom levels
+    // hold most nodes, and there 8 bins found planes as good (kitchen SAH 24.66 -> 24.44,
+    // traversal within noise) for a 4-6% faster build (AVX-512 leaves, one thread).
+    int nb = count < static_cast<std::uint32_t>(opt_.bins) ? static_cast<int>(count) : opt_.bins;
+    if (count <= kSmallNode && nb > kSmallNodeBins) nb = kSmallNodeBins;
     const BinGrid grid(t.cbox, nb);
     if (!grid.any_active()) {
       if (count <= max_leaf) return false;
