@@ -19,6 +19,8 @@
 // Any hit needs no division at all for lanes that sure_hit() proves in range (all but
 // those within ~16 ulps of either end); the rest go through the quotient as above.
 #pragma once
+#include <immintrin.h>
+
 #include <bit>
 #include <cmath>
 #include <cstddef>
@@ -53,7 +55,8 @@ struct WatertightTest {
   /// (masks x0: kx == 0, x1: kx == 1, likewise y0, y1 for ky and z0, z1 for kz).
   struct Rays {
     B o[3];           // origin x y z (per-lane permutation)
-    B okx, oky, okz;  // origin along kx, ky, kz (uniform permutation)
+    B okx, oky, okz;  // origin along kx, ky, kz (per lane when not uniform)
+    IntB<Arch> ikx, iky, ikz;  // kx, ky, kz per lane (not uniform; AVX2, AVX-512)
     B tmin;
     B tmin_lo;     // lower end of the prefilter, tmin - |tmin| kScaledPad (then times
                    // |det|); NaN where |sz| > 0 fails: an infinite dir[kz] (sz = 0)
@@ -256,6 +259,10 @@ auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays 
     out.x0 = xsimd::bool_cast(kx == I(0)), out.x1 = xsimd::bool_cast(kx == I(1));
     out.y0 = xsimd::bool_cast(ky == I(0)), out.y1 = xsimd::bool_cast(ky == I(1));
     out.z0 = xsimd::bool_cast(kz == I(0)), out.z1 = xsimd::bool_cast(kz == I(1));
+    out.ikx = kx, out.iky = ky, out.ikz = kz;
+    out.okx = xsimd::select(out.x0, out.o[0], xsimd::select(out.x1, out.o[1], out.o[2]));
+    out.oky = xsimd::select(out.y0, out.o[0], xsimd::select(out.y1, out.o[1], out.o[2]));
+    out.okz = xsimd::select(out.z0, out.o[0], xsimd::select(out.z1, out.o[1], out.o[2]));
   }
   return out;
 }
@@ -283,7 +290,22 @@ auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, co
             B(b.p[1][kx][j]) - r.okx, B(b.p[1][ky][j]) - r.oky, B(b.p[1][kz][j]) - r.okz,
             B(b.p[2][kx][j]) - r.okx, B(b.p[2][ky][j]) - r.oky, B(b.p[2][kz][j]) - r.okz};
   }
-  // Per-lane permutation: relative coordinates along x y z, then picked per lane.
+  if constexpr (kLanes<Arch> >= 8) {
+    // Per-lane permutation, AVX2 and AVX-512: the vertex's x y z in one register, each lane
+    // picking its axis with one permute, minus the origin permuted once per packet (the same
+    // subtraction p[k] - o[k] per lane as below, three permutes instead of six selects).
+    const auto pick = [&](int k, const IntB<Arch>& axis) {
+      const __m128 v = _mm_setr_ps(b.p[k][0][j], b.p[k][1][j], b.p[k][2][j], 0.0f);
+      if constexpr (kLanes<Arch> == 16)
+        return B(_mm512_permutexvar_ps(axis, _mm512_castps128_ps512(v)));
+      else
+        return B(_mm256_permutevar8x32_ps(_mm256_castps128_ps256(v), axis));
+    };
+    return {pick(0, r.ikx) - r.okx, pick(0, r.iky) - r.oky, pick(0, r.ikz) - r.okz,
+            pick(1, r.ikx) - r.okx, pick(1, r.iky) - r.oky, pick(1, r.ikz) - r.okz,
+            pick(2, r.ikx) - r.okx, pick(2, r.iky) - r.oky, pick(2, r.ikz) - r.okz};
+  }
+  // Per-lane permutation (SSE4.2): relative coordinates along x y z, then picked per lane.
   Tris out;
   B* dst[3][3] = {{&out.akx, &out.aky, &out.akz}, {&out.bkx, &out.bky, &out.bkz}, {&out.ckx, &out.cky, &out.ckz}};
   for (int k = 0; k < 3; ++k) {
