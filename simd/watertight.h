@@ -297,9 +297,9 @@ auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, co
     const auto pick = [&](int k, const IntB<Arch>& axis) {
       const __m128 v = _mm_setr_ps(b.p[k][0][j], b.p[k][1][j], b.p[k][2][j], 0.0f);
       if constexpr (kLanes<Arch> == 16)
-        return B(_mm512_permutexvar_ps(axis, _mm512_castps128_ps512(v)));
+        return B(_mm512_maskz_permutexvar_ps(0xffff, axis, _mm512_zextps128_ps512(v)));  // (maskz: GCC 12 warns on the unmasked form)
       else
-        return B(_mm256_permutevar8x32_ps(_mm256_castps128_ps256(v), axis));
+        return B(_mm256_permutevar8x32_ps(_mm256_zextps128_ps256(v), axis));
     };
     return {pick(0, r.ikx) - r.okx, pick(0, r.iky) - r.oky, pick(0, r.ikz) - r.okz,
             pick(1, r.ikx) - r.okx, pick(1, r.iky) - r.oky, pick(1, r.ikz) - r.okz,
