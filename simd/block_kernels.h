@@ -223,8 +223,8 @@ void PacketKernels<Arch, Test, K, BW>::prepare(const RayPacket<K>& rays, Prepare
 }
 
 template <class Arch, TriangleTest Test, int K, int BW>
-void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepared, const Block* blocks, std::uint32_t count,
-                                             HitPacket<K>& hits) {
+void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepared, const Block* blocks,
+                                                 std::uint32_t count, HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
@@ -273,7 +273,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
 
 template <class Arch, TriangleTest Test, int K, int BW>
 void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K>& prepared, const Block& block, int j,
-                                                      HitPacket<K>& hits) {
+                                                          HitPacket<K>& hits) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
@@ -304,7 +304,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K
 
 template <class Arch, TriangleTest Test, int K, int BW>
 std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
-                                                     std::uint32_t count, std::uint32_t active) {
+                                                         std::uint32_t count, std::uint32_t active) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;

@@ -54,8 +54,8 @@ struct WatertightTest {
   /// lanes (`uniform`, always so for a single ray; then kx, ky, kz apply) or per lane
   /// (masks x0: kx == 0, x1: kx == 1, likewise y0, y1 for ky and z0, z1 for kz).
   struct Rays {
-    B o[3];           // origin x y z (per-lane permutation)
-    B okx, oky, okz;  // origin along kx, ky, kz (per lane when not uniform)
+    B o[3];                    // origin x y z (per-lane permutation)
+    B okx, oky, okz;           // origin along kx, ky, kz (per lane when not uniform)
     IntB<Arch> ikx, iky, ikz;  // kx, ky, kz per lane (not uniform; AVX2, AVX-512)
     B tmin;
     B tmin_lo;     // lower end of the prefilter, tmin - |tmin| kScaledPad (then times
@@ -297,7 +297,8 @@ auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, co
     const auto pick = [&](int k, const IntB<Arch>& axis) {
       const __m128 v = _mm_setr_ps(b.p[k][0][j], b.p[k][1][j], b.p[k][2][j], 0.0f);
       if constexpr (kLanes<Arch> == 16)
-        return B(_mm512_maskz_permutexvar_ps(0xffff, axis, _mm512_zextps128_ps512(v)));  // (maskz: GCC 12 warns on the unmasked form)
+        // (maskz: GCC 12's header makes the unmasked form warn, -Wmaybe-uninitialized)
+        return B(_mm512_maskz_permutexvar_ps(0xffff, axis, _mm512_zextps128_ps512(v)));
       else
         return B(_mm256_permutevar8x32_ps(_mm256_zextps128_ps256(v), axis));
     };

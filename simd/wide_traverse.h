@@ -18,8 +18,8 @@
 // the padding folded into the reciprocal once per ray (same rounding bound, one multiply
 // less per node), and with FMA (AVX2, AVX-512) and no zero direction component each slab
 // distance is one fused plane * inv - c, c = org * inv widened outwards once per ray (see
-// walk). Its boxes may differ from the oracle's by an ulp or two, never by culling a box
-// the exact ray meets; the triangle answers are the same.
+// walk). Its slab distances may differ from the oracle's by a few ulps of org * inv, never
+// by culling a box the exact ray meets; the triangle answers are the same.
 #pragma once
 #include <immintrin.h>
 
@@ -75,11 +75,12 @@ struct WideView {
 
 /// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
 /// W = kLanes<SingleRayArch<Arch>> triangles (8 on AVX-512, whose packets still run 16
-/// lanes: single rays were faster on 8-triangle leaves, packets no slower). Robust = false drops the exit padding (kSlabExitPad) from
-/// the box test and the stack pruning (Options::robust = false, the fast path; the NaN-safe
-/// operand order stays, it costs nothing); its answers may differ from the oracle's where a
-/// ray grazes a box (the mutation test in tests/accel shows it). All functions are
-/// thread-safe (pure functions of their arguments).
+/// lanes: single rays were faster on 8-triangle leaves, packets no slower). Robust = false
+/// drops the exit padding (kSlabExitPad) from the box test and the stack pruning
+/// (Options::robust = false, the fast path; the NaN-safe operand order stays, it costs
+/// nothing); its answers may differ from the oracle's where a ray grazes a box (the mutation
+/// test in tests/accel shows it). All functions are thread-safe (pure functions of their
+/// arguments).
 ///
 /// Semantics, all forms: the answers of the scalar oracle's closest-hit / any-hit
 /// traversal with the same triangle test (same hit / miss; same prim, or the same t when
@@ -317,11 +318,11 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   const auto fix = V8::set1(inv[0] * pad1), fiy = V8::set1(inv[1] * pad1), fiz = V8::set1(inv[2] * pad1);
   // With FMA and no zero direction component, a slab distance is one fused operation,
   // b inv - c, where c is org inv rounded outwards (up for near planes, down for far ones)
-  // once per ray. Against (b - org) inv that moves near
-  // distances down and far ones up by at most an ulp of org inv, and rounds once instead of
-  // twice, so the padding that covers the two-rounding form covers it (never culls a box
-  // the exact ray meets). NaN (inf - inf, only for a subnormal direction component, whose
-  // reciprocal overflows) is dropped by max/min as in the other form.
+  // once per ray. Against (b - org) inv that moves near distances down and far ones up by a
+  // few ulps of org inv, and rounds once instead of twice, so the padding that covers the
+  // two-rounding form covers it (never culls a box the exact ray meets). NaN (inf - inf,
+  // only for a subnormal direction component, whose reciprocal overflows) is dropped by
+  // max/min as in the other form.
   constexpr bool kFused = NoZero && V8::kFma;
   typename V8::V cnx{}, cny{}, cnz{}, cfx{}, cfy{}, cfz{};
   if constexpr (kFused) {

@@ -127,10 +127,11 @@ template <class Arch>
 void kernels_pin() {
   constexpr int W = kLanes<Arch>;
   constexpr TriangleTest kWt = TriangleTest::watertight;
+  constexpr bool kFused = volley::core::watertight_fused_for(volley::simd::kIsaOf<Arch>);
   Agreement single, any, packet, packet_any;
   for (float scale : {1.0f, 1e-19f, 1e-20f, 1e-21f, 1e15f})
     for (float dscale : {1.0f, 1e-6f, 1e6f})
-      for (const Case& c : cases(29, scale, dscale, 60, volley::core::watertight_fused_for(volley::simd::kIsaOf<Arch>))) {
+      for (const Case& c : cases(29, scale, dscale, 60, kFused)) {
         // The triangle alone in a block, and at the last lane of a full one whose other
         // triangles are far off the ray.
         Soup alone, last;
