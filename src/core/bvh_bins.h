@@ -163,23 +163,36 @@ struct Bins {
       bin.lo = _mm_min_ps(bin.lo, lo);
       bin.hi = _mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(_mm_max_ps(bin.hi, hi)), one_count));
     };
-    auto add_one = [&](const Item& item, int set) {
-      const __m128 lo = load_lo(item);
-      const __m128 hi = load_hi(item);
-      // Clamped on both sides: on an inactive axis whose centroid extent overflowed,
-      // (c - cmin) * 0 is inf * 0 = NaN, which converts to INT_MIN.
-      const __m128i k = _mm_max_epi32(
-          _mm_min_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(center4(lo, hi), cmin), scale4)), last), first);
-      const __m128i offset = _mm_add_epi32(_mm_slli_epi32(k, kShift), axis_offset);
-      char* const bins = base + set * set_bytes;
-      bump(bins, static_cast<std::uint32_t>(_mm_cvtsi128_si32(offset)), lo, hi);
-      bump(bins, static_cast<std::uint32_t>(_mm_extract_epi32(offset, 1)), lo, hi);
-      bump(bins, static_cast<std::uint32_t>(_mm_extract_epi32(offset, 2)), lo, hi);
-    };
-    std::uint32_t i = begin;
-    for (; end - i >= kSets; i += kSets)
-      for (int set = 0; set < kSets; ++set) add_one(items[i + set], set);
-    for (int set = 0; i < end; ++i, ++set) add_one(items[i], set);
+    // In blocks: the bin offsets of kBlock items first, then their bins' updates. Computed
+    // item by item, an update's address came at the end of a long chain (load, centroid,
+    // convert, clamp), and the next item's bin loads ran ahead of the stores whose address
+    // was still unknown, often to the same bin (neighbouring primitives): the loads waited or
+    // were replayed. Here the addresses are ready in a buffer. Kitchen, one core: 4-6% faster.
+    constexpr std::uint32_t kBlock = 16;
+    static_assert(kBlock % kSets == 0, "item begin + k goes into set k % kSets");
+    alignas(16) std::uint32_t offsets[kBlock][4];
+    for (std::uint32_t i = begin; i < end; i += kBlock) {
+      const std::uint32_t n = std::min(kBlock, end - i);
+      for (std::uint32_t j = 0; j < n; ++j) {
+        const Item& item = items[i + j];
+        // Clamped on both sides: on an inactive axis whose centroid extent overflowed,
+        // (c - cmin) * 0 is inf * 0 = NaN, which converts to INT_MIN.
+        const __m128i k = _mm_max_epi32(
+            _mm_min_epi32(
+                _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(center4(load_lo(item), load_hi(item)), cmin), scale4)), last),
+            first);
+        _mm_store_si128(reinterpret_cast<__m128i*>(offsets[j]), _mm_add_epi32(_mm_slli_epi32(k, kShift), axis_offset));
+      }
+      for (std::uint32_t j = 0; j < n; ++j) {
+        const Item& item = items[i + j];
+        const __m128 lo = load_lo(item);
+        const __m128 hi = load_hi(item);
+        char* const bins = base + (j % kSets) * set_bytes;
+        bump(bins, offsets[j][0], lo, hi);
+        bump(bins, offsets[j][1], lo, hi);
+        bump(bins, offsets[j][2], lo, hi);
+      }
+    }
   }
 };
 
