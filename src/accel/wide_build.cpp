@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 #include <utility>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -59,7 +61,19 @@ simd::WideNode<N> inert_node() {
 class CollapsePlan {
  public:
   explicit CollapsePlan(const core::Bvh& bvh)
-      : bvh_(bvh), cost_(bvh.nodes.size()), choice_(bvh.nodes.size()), split_(bvh.nodes.size()) {
+      : bvh_(bvh),
+        cost_(new std::array<double, N>[bvh.nodes.size()]),
+        choice_(new std::array<std::uint8_t, N>[bvh.nodes.size()]),
+        split_(new std::array<std::uint8_t, N>[bvh.nodes.size()]) {
+    // Children before parents. build_bvh lays a node's children out after it (depth first),
+    // so the reverse of the array order is one; any other layout takes the post order.
+    bool children_after = true;
+    for (std::size_t n = 0; n < bvh.nodes.size(); ++n)
+      if (!bvh.nodes[n].is_leaf() && bvh.nodes[n].first_or_child <= n) children_after = false;
+    if (children_after) {
+      for (std::size_t n = bvh.nodes.size(); n-- > 0;) solve(static_cast<std::uint32_t>(n));
+      return;
+    }
     // Post order with an explicit stack (no recursion: a binary BVH may be 64 deep).
     std::vector<std::pair<std::uint32_t, bool>> stack{{0u, false}};
     while (!stack.empty()) {
@@ -154,9 +168,10 @@ class CollapsePlan {
 
   static constexpr double kInfD = std::numeric_limits<double>::infinity();
   const core::Bvh& bvh_;
-  std::vector<std::array<double, N>> cost_;
-  std::vector<std::array<std::uint8_t, N>> choice_;
-  std::vector<std::array<std::uint8_t, N>> split_;
+  // Uninitialised: solve() writes every entry a node's parent and collect() read.
+  std::unique_ptr<std::array<double, N>[]> cost_;
+  std::unique_ptr<std::array<std::uint8_t, N>[]> choice_;
+  std::unique_ptr<std::array<std::uint8_t, N>[]> split_;
 };
 
 }  // namespace
@@ -217,11 +232,18 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
     // children it meets by distance, but any hit takes them in this order, and a leaf can end
     // it at once while a larger box is likelier to hold an occluder: occluded1 +3-7% on
     // Sponza, conference and kitchen (bunny within noise; closest hit within noise).
-    std::stable_sort(kids.begin(), kids.end(), [&](std::uint32_t x, std::uint32_t y) {
+    // A stable insertion sort by hand: std::stable_sort calls memmove for these <= N ids.
+    auto before = [&](std::uint32_t x, std::uint32_t y) {
       const core::BvhNode &a = bvh.nodes[x], &b = bvh.nodes[y];
       if (a.is_leaf() != b.is_leaf()) return a.is_leaf();
       return a.box.half_area() > b.box.half_area();
-    });
+    };
+    for (std::size_t i = 1; i < kids.size(); ++i) {
+      const std::uint32_t k = kids[i];
+      std::size_t j = i;
+      for (; j > 0 && before(k, kids[j - 1]); --j) kids[j] = kids[j - 1];
+      kids[j] = k;
+    }
     // Fill the node: boxes bit for bit, leaves referenced, interior children allocated
     // side by side and queued (the first child on top, so it is laid out next).
     simd::WideNode<N> node = inert_node();
@@ -262,7 +284,8 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
           tri_ids.resize(leaf.count);
           for (std::uint32_t i = 0; i < leaf.count; ++i) {
             const std::uint32_t prim = bvh.prim_index[leaf.first_or_child + i];
-            std::copy_n(xyz + 9 * std::size_t{prim}, 9, tri_xyz.data() + 9 * std::size_t{i});
+            // memcpy of a constant size is inlined; std::copy_n's memmove was a call per triangle.
+            std::memcpy(tri_xyz.data() + 9 * std::size_t{i}, xyz + 9 * std::size_t{prim}, 9 * sizeof(float));
             tri_ids[i] = ids[prim];
           }
           simd::pack_blocks<Test, W>(tri_xyz.data(), tri_ids.data(), leaf.count, blocks.data() + leaves[l].first_block);

@@ -129,7 +129,9 @@ class Splitter {
 
     // The cheapest plane: cost in units of intersection_cost * area,
     // A_left slots(N_left) + A_right slots(N_right).
-    const Plane plane = best_plane(grid);
+    // Counts below 2^31 (always, but for a node of 2^31 primitives or more) convert with one
+    // signed conversion.
+    const Plane plane = count < (1u << 31) ? best_plane<true>(grid) : best_plane<false>(grid);
     const float best_cost = plane.cost;
     const int best_axis = plane.axis;
     const int best_bin = plane.bin;  // left side takes bins [0, best_bin]
@@ -161,10 +163,11 @@ class Splitter {
   // Sweeps the bins from both sides, the three axes at once (lane a: axis a), in the order
   // and with the float operations of one axis at a time: the same plane, ties included
   // (the first axis, then the highest bin, of the least cost).
+  template <bool kBelow2To31>
   Plane best_plane(const BinGrid& grid) const {
     const int nb = grid.nb;
-    __m128 left_area[256];  // lane a: area of bins [0, b] of axis a
-    __m128i left_count[256];
+    __m128* const left_area = left_area_;  // lane a: area of bins [0, b] of axis a
+    __m128i* const left_count = left_count_;
     Box4 acc[3];
     __m128i n = _mm_setzero_si128();
     for (int b = 0; b < nb - 1; ++b) {
@@ -182,7 +185,8 @@ class Splitter {
     for (int b = nb - 1; b > 0; --b) {
       n = _mm_add_epi32(n, add_bins(acc, b));
       const __m128i lc = left_count[b - 1];
-      const __m128 cost = _mm_add_ps(_mm_mul_ps(left_area[b - 1], slots(lc)), _mm_mul_ps(half_areas(acc), slots(n)));
+      const __m128 cost = _mm_add_ps(_mm_mul_ps(left_area[b - 1], slots<kBelow2To31>(lc)),
+                                       _mm_mul_ps(half_areas(acc), slots<kBelow2To31>(n)));
       const __m128i a_side_empty = _mm_or_si128(_mm_cmpeq_epi32(n, zero), _mm_cmpeq_epi32(lc, zero));
       const __m128 better =
           _mm_andnot_ps(_mm_castsi128_ps(a_side_empty), _mm_and_ps(active, _mm_cmplt_ps(cost, best_cost)));
@@ -230,23 +234,26 @@ class Splitter {
     return _mm_andnot_ps(empty, area);
   }
 
-  // slots() of each lane of n, with the same float operations.
+  // slots() of each lane of n, with the same float operations. kBelow2To31: every lane is
+  // below 2^31, where the signed conversion rounds as static_cast<float>(std::uint32_t).
+  template <bool kBelow2To31>
   __m128 slots(__m128i n) const {
+    const __m128 nf = kBelow2To31 ? _mm_cvtepi32_ps(n) : u32_to_float(n);
     // Without padding the sum below is n + 0: skip it (the scalar leaf ISA's options).
-    if (!padded_leaves_) return u32_to_float(n);
+    if (!padded_leaves_) return nf;
     const std::uint32_t w = static_cast<std::uint32_t>(opt_.leaf_block_width);
-    __m128i padded;
+    __m128i empty;  // padded - n, the empty slots of the last block
     if (block_shift_ >= 0) {
-      const __m128i shift = _mm_cvtsi32_si128(block_shift_);
-      padded = _mm_sll_epi32(_mm_srl_epi32(_mm_add_epi32(n, _mm_set1_epi32(static_cast<int>(w - 1))), shift), shift);
-    } else {
-      alignas(16) std::uint32_t lanes[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes), n);
-      for (std::uint32_t& v : lanes) v = (v + w - 1) / w * w;
-      padded = _mm_load_si128(reinterpret_cast<const __m128i*>(lanes));
+      // (-n) mod w for a power of two w: the same as ((n + w - 1) >> shift << shift) - n
+      // modulo 2^32, and below w <= 64, so the signed conversion is exact.
+      empty = _mm_and_si128(_mm_sub_epi32(_mm_setzero_si128(), n), _mm_set1_epi32(static_cast<int>(w - 1)));
+      return _mm_add_ps(nf, _mm_mul_ps(_mm_set1_ps(opt_.padding_cost), _mm_cvtepi32_ps(empty)));
     }
-    return _mm_add_ps(u32_to_float(n),
-                      _mm_mul_ps(_mm_set1_ps(opt_.padding_cost), u32_to_float(_mm_sub_epi32(padded, n))));
+    alignas(16) std::uint32_t lanes[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), n);
+    for (std::uint32_t& v : lanes) v = (v + w - 1) / w * w - v;
+    empty = _mm_load_si128(reinterpret_cast<const __m128i*>(lanes));
+    return _mm_add_ps(nf, _mm_mul_ps(_mm_set1_ps(opt_.padding_cost), u32_to_float(empty)));
   }
 
   // Unsigned lanes to float, rounded once as static_cast<float>(std::uint32_t): both halves
@@ -399,6 +406,10 @@ class Splitter {
   const BvhBuildOptions& opt_;
   Item* items_;
   Bins bins_;
+  // best_plane()'s sweep state, per bin (members: no 8 KB stack frame, probed page by page,
+  // per node).
+  mutable __m128 left_area_[256];
+  mutable __m128i left_count_[256];
   int block_shift_ = shift_of(opt_.leaf_block_width);  // log2(leaf_block_width), -1 if not a power of two
   bool padded_leaves_ = opt_.leaf_block_width > 1 && opt_.padding_cost > 0.0f;  // slots(n) > n for some n
 };
