@@ -99,14 +99,18 @@ struct WatertightTest {
   /// per call, so call overhead and batches passed through memory would dominate).
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
 
+  /// The sheared vertices' edge functions U, V, W and the lanes whose signs do not mix
+  /// (`inside`): the first steps of test() and depth().
+  [[gnu::always_inline]] inline static Edges edges(const Rays& r, const Tris& tri, M& inside);
   /// Lanes past the edge and det tests (`inside`; the rest is meaningful there only, and
   /// unset when no lane is) with their scaled distance: t det, with det's sign folded in (ts_s).
   struct Depth {
     M inside;
     B ts, ts_s, det, ad, u, v;
   };
-  /// test()'s steps up to t det, for the any-hit forms. Written out twice on purpose: with
-  /// test() built on it, the closest-hit forms ran 4-9% more instructions (AVX2, callgrind).
+  /// test()'s steps up to t det, for the any-hit forms. Both share edges(); the rest is
+  /// written out twice on purpose: with test() built on depth(), the closest-hit forms ran
+  /// 4-9% more instructions (AVX2, callgrind).
   [[gnu::always_inline]] inline static Depth depth(const Rays& r, const Tris& tri);
   /// test()'s prefilter on the inside lanes of `d`.
   [[gnu::always_inline]] inline static M prefilter(const Rays& r, const Depth& d, B upper) {
@@ -319,7 +323,7 @@ auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, co
 }
 
 template <class Arch>
-auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
+auto WatertightTest<Arch>::edges(const Rays& r, const Tris& tri, M& inside) -> Edges {
   const B zero(0.0f);
   // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
   const B ax = shear(tri.akx, r.sx, tri.akz);
@@ -334,13 +338,19 @@ auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
   // exactly 0 the signs are the sign bits (a NaN lane fails on det below). An exact 0 may
   // hide a nonzero one: those lanes are redone in double, and signs are then compared as
   // the oracle does, where 0 goes with either sign.
-  M inside;
   if (all_nonzero<Arch>(e.u, e.v, e.w)) [[likely]] {
     inside = same_sign_bit<Arch>(e.u, e.v, e.w);
   } else {
     e = fallback(ax, ay, bx, by, cx, cy, e.u, e.v, e.w);
     inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
   }
+  return e;
+}
+
+template <class Arch>
+auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
+  M inside;
+  Edges e = edges(r, tri, inside);
   // det NaN or Inf fails here; det = 0 (the ray lies in the plane) fails on its quotient
   // t = 0 / 0 (the prefilter passes it only with t det = 0), so no test of its own.
   Depth d;
@@ -357,27 +367,8 @@ auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
 
 template <class Arch>
 auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
-  const B zero(0.0f);
-  // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
-  const B ax = shear(tri.akx, r.sx, tri.akz);
-  const B ay = shear(tri.aky, r.sy, tri.akz);
-  const B bx = shear(tri.bkx, r.sx, tri.bkz);
-  const B by = shear(tri.bky, r.sy, tri.bkz);
-  const B cx = shear(tri.ckx, r.sx, tri.ckz);
-  const B cy = shear(tri.cky, r.sy, tri.ckz);
-  // Scaled barycentrics: 2D edge functions at the origin, both products rounded.
-  Edges e{cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax};
-  // Mixed signs: the origin is outside (both facings accepted). With no edge function
-  // exactly 0 the signs are the sign bits (a NaN lane fails on det below). An exact 0 may
-  // hide a nonzero one: those lanes are redone in double, and signs are then compared as
-  // the oracle does, where 0 goes with either sign.
   M inside;
-  if (all_nonzero<Arch>(e.u, e.v, e.w)) [[likely]] {
-    inside = same_sign_bit<Arch>(e.u, e.v, e.w);
-  } else {
-    e = fallback(ax, ay, bx, by, cx, cy, e.u, e.v, e.w);
-    inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
-  }
+  Edges e = edges(r, tri, inside);
   // det NaN or Inf fails here; det = 0 (the ray lies in the plane) fails on its quotient
   // t = 0 / 0 (the prefilter passes it only with t det = 0), so no test of its own.
   const B det = e.u + e.v + e.w;
