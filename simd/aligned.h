@@ -6,12 +6,15 @@
 #include <new>
 #include <vector>
 
+#include "core/large_alloc.h"  // declarations only
+
 namespace volley::simd {
 
 /// Cache-line (and AVX-512 register) alignment of every SoA buffer.
 inline constexpr std::size_t kAlign = 64;
 
-/// std::allocator that returns kAlign-aligned memory (operator new with align_val_t).
+/// std::allocator that returns kAlign-aligned memory; arrays of 4 MiB or more (triangle
+/// blocks, wide nodes) on huge pages (core::allocate_large).
 template <class T>
 struct AlignedAllocator {
   using value_type = T;
@@ -19,9 +22,9 @@ struct AlignedAllocator {
   template <class U>
   AlignedAllocator(const AlignedAllocator<U>&) noexcept {}
   T* allocate(std::size_t n) {
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kAlign)));
+    return static_cast<T*>(core::allocate_large(n * sizeof(T), kAlign));
   }
-  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t(kAlign)); }
+  void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign); }
   template <class U>
   bool operator==(const AlignedAllocator<U>&) const noexcept { return true; }
 };

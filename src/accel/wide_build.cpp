@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/large_alloc.h"
 #include "simd/block_build.h"
 
 namespace volley::accel {
@@ -62,9 +63,9 @@ class CollapsePlan {
  public:
   explicit CollapsePlan(const core::Bvh& bvh)
       : bvh_(bvh),
-        cost_(new std::array<double, N>[bvh.nodes.size()]),
-        choice_(new std::array<std::uint8_t, N>[bvh.nodes.size()]),
-        split_(new std::array<std::uint8_t, N>[bvh.nodes.size()]) {
+        cost_(bvh.nodes.size()),
+        choice_(bvh.nodes.size()),
+        split_(bvh.nodes.size()) {
     // Children before parents. build_bvh lays a node's children out after it (depth first),
     // so the reverse of the array order is one; any other layout takes the post order.
     bool children_after = true;
@@ -169,9 +170,9 @@ class CollapsePlan {
   static constexpr double kInfD = std::numeric_limits<double>::infinity();
   const core::Bvh& bvh_;
   // Uninitialised: solve() writes every entry a node's parent and collect() read.
-  std::unique_ptr<std::array<double, N>[]> cost_;
-  std::unique_ptr<std::array<std::uint8_t, N>[]> choice_;
-  std::unique_ptr<std::array<std::uint8_t, N>[]> split_;
+  core::LargeArray<std::array<double, N>> cost_;
+  core::LargeArray<std::array<std::uint8_t, N>> choice_;
+  core::LargeArray<std::array<std::uint8_t, N>> split_;
 };
 
 }  // namespace

@@ -31,6 +31,7 @@
 
 #include "core/bvh.h"
 #include "core/bvh_bins.h"
+#include "core/large_alloc.h"
 
 namespace volley::core {
 namespace {
@@ -464,7 +465,7 @@ struct TopNode {
 class Builder {
  public:
   Builder(std::span<const BBox> boxes, const BvhBuildOptions& options)
-      : opt_(options), n_(static_cast<std::uint32_t>(boxes.size())), items_(new Item[boxes.size()]) {
+      : opt_(options), n_(static_cast<std::uint32_t>(boxes.size())), items_(boxes.size()) {
     // Valid primitives (non-empty box, finite centroid, hence finite bounds) go to
     // the front in input order, the others to the back; both sets are bounded.
     std::uint32_t front = 0;
@@ -599,7 +600,7 @@ class Builder {
 
   const BvhBuildOptions opt_;
   const std::uint32_t n_;
-  std::unique_ptr<Item[]> items_;  // default-initialised: every slot is written above
+  LargeArray<Item> items_;  // uninitialised: every slot is written above
   std::uint32_t n_valid_ = 0;
   BBox valid_box_, valid_cbox_, invalid_box_;
 };

@@ -1,0 +1,47 @@
+// Storage for the large arrays of a build (items, boxes, nodes, triangle blocks) on
+// transparent huge pages. A build of a million triangles touches about 150 MB of fresh
+// memory; faulted in 4 KiB pages that cost a fifth of a one-thread build (about 1.8 us in
+// the kernel per page here), in 2 MiB pages almost nothing. Embree maps its large arrays
+// the same way.
+#pragma once
+#include <cstddef>
+#include <type_traits>
+
+namespace volley::core {
+
+/// Arrays this large or larger are mapped in whole 2 MiB pages.
+inline constexpr std::size_t kLargeAllocBytes = std::size_t{4} << 20;
+
+/// `bytes` of storage aligned to `align` (a power of two, at most 4096): operator new below
+/// kLargeAllocBytes; above, an anonymous mapping aligned to 2 MiB with MADV_HUGEPAGE (the
+/// kernel still decides; its pages come zeroed). Throws std::bad_alloc.
+void* allocate_large(std::size_t bytes, std::size_t align);
+
+/// Frees storage from allocate_large, given the same bytes and align.
+void free_large(void* p, std::size_t bytes, std::size_t align) noexcept;
+
+/// A fixed number of trivial T on allocate_large storage, left uninitialised (a build's
+/// scratch tables, written before they are read).
+template <class T>
+class LargeArray {
+  static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>);
+
+ public:
+  explicit LargeArray(std::size_t n)
+      : n_(n), data_(static_cast<T*>(allocate_large(n * sizeof(T), alignof(T)))) {}
+  ~LargeArray() { free_large(data_, n_ * sizeof(T), alignof(T)); }
+  LargeArray(const LargeArray&) = delete;
+  LargeArray& operator=(const LargeArray&) = delete;
+
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  T* get() { return data_; }
+  const T* get() const { return data_; }
+  std::size_t size() const { return n_; }
+
+ private:
+  std::size_t n_;
+  T* data_;
+};
+
+}  // namespace volley::core
