@@ -463,9 +463,9 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
       const std::uint32_t count = (ref >> wide_ref::kCountShift) & wide_ref::kCountMask;
       const Block* blocks = all_blocks + (ref & wide_ref::kFirstMask);
       if constexpr (AnyHit) {
-        if (count != 0 && Leaf::occluded(pr, blocks, count)) return true;
+        if (count != 0 && Leaf::occluded_inline(pr, blocks, count)) return true;
       } else if (count != 0) {
-        Leaf::intersect(pr, blocks, count, hit);
+        Leaf::intersect_inline(pr, blocks, count, hit);
         if (hit.t < tmax) {
           tmax = hit.t;
           tmax8 = V8::set1(tmax * pad1);
