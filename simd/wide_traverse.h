@@ -353,7 +353,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   for (;;) {
     if (!(ref & wide_ref::kLeafBit)) {
       // Interior: slab test of all eight children at once.
-      const WideNode<N>& node = nodes[ref];
+      const WideNode<N>& node = wide_ref::node_at(nodes, ref);
       // The child references sit on the node's fourth cache line, read only after the slab
       // test: request it now, beside the three lines of boxes.
       _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);
@@ -706,7 +706,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
   for (;;) {
     if (!(cur & wide_ref::kLeafBit)) {
       // Interior: the interval slab test of all eight children.
-      const WideNode<N>& node = bvh.nodes[cur];
+      const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
       const auto dnx = V8::sub(V8::load(node.bounds[np[0]]), onx);
       const auto dny = V8::sub(V8::load(node.bounds[np[1]]), ony);
       const auto dnz = V8::sub(V8::load(node.bounds[np[2]]), onz);
@@ -892,7 +892,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
       if (!(cur & wide_ref::kLeafBit)) {
         // Interior: each child against the active lanes; keep the first-entered child as the
         // next `cur`, push the others.
-        const WideNode<N>& node = bvh.nodes[cur];
+        const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
         std::uint32_t next = wide_ref::kEmptyRef;
         B next_dist[C];
         for (int c = 0; c < C; ++c) next_dist[c] = B(kNaN);

@@ -216,7 +216,7 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
   // the oracle's binary BVH tests its root box, and both Accels cull the same rays (an
   // ill-conditioned Moller "hit" far outside the triangle's box is dropped by both).
   const CollapsePlan plan(bvh);
-  root = 0;
+  root = ref::interior<N>(0);
   nodes.push_back(inert_node());
   std::vector<Pending> stack{{0, 0, 0}};
   std::vector<std::uint32_t> kids;
@@ -260,11 +260,12 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
       if (c.is_leaf()) {
         node.child[used] = leaf_ref(kid, p.depth + 1);
       } else {
-        const std::uint32_t w = static_cast<std::uint32_t>(nodes.size());
-        if (w & ref::kLeafBit) throw std::length_error("wide BVH: more than 2^31 nodes");
+        const std::size_t w = nodes.size();
+        if (w >= ref::kMaxNodes<N>)
+          throw std::length_error("wide BVH: more than " + std::to_string(ref::kMaxNodes<N>) + " nodes");
         nodes.push_back(inert_node());
-        node.child[used] = w;
-        queued[nqueued++] = {kid, w, p.depth + 1};
+        node.child[used] = ref::interior<N>(w);
+        queued[nqueued++] = {kid, static_cast<std::uint32_t>(w), p.depth + 1};
       }
       ++used;
     }
