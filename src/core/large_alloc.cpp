@@ -18,6 +18,7 @@ std::size_t round_up(std::size_t bytes) { return (bytes + kHugePage - 1) & ~(kHu
 void* allocate_large(std::size_t bytes, std::size_t align) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   if (bytes >= kLargeAllocBytes) {
+    if (bytes > SIZE_MAX - 2 * kHugePage) throw std::bad_alloc();  // round_up would wrap
     const std::size_t size = round_up(bytes);
     // Map one huge page more than needed and unmap the misaligned head and the tail.
     void* raw = mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

@@ -5,6 +5,8 @@
 // the same way.
 #pragma once
 #include <cstddef>
+#include <cstdint>
+#include <new>
 #include <type_traits>
 
 namespace volley::core {
@@ -27,9 +29,8 @@ class LargeArray {
   static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>);
 
  public:
-  explicit LargeArray(std::size_t n)
-      : n_(n), data_(static_cast<T*>(allocate_large(n * sizeof(T), alignof(T)))) {}
-  ~LargeArray() { free_large(data_, n_ * sizeof(T), alignof(T)); }
+  explicit LargeArray(std::size_t n) : n_(n), data_(static_cast<T*>(allocate_large(bytes(n), alignof(T)))) {}
+  ~LargeArray() { free_large(data_, bytes(n_), alignof(T)); }
   LargeArray(const LargeArray&) = delete;
   LargeArray& operator=(const LargeArray&) = delete;
 
@@ -40,6 +41,10 @@ class LargeArray {
   std::size_t size() const { return n_; }
 
  private:
+  static std::size_t bytes(std::size_t n) {
+    if (n > SIZE_MAX / sizeof(T)) throw std::bad_alloc();
+    return n * sizeof(T);
+  }
   std::size_t n_;
   T* data_;
 };

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <initializer_list>
+#include <new>
 
 #include "core/large_alloc.h"
 
@@ -27,6 +28,12 @@ TEST_CASE("allocate_large: small and large sizes are aligned, writable and freed
     free_large(p, bytes, 64);
   }
   free_large(nullptr, kLargeAllocBytes, 64);  // a no-op, as delete of nullptr
+}
+
+TEST_CASE("allocate_large: absurd sizes throw std::bad_alloc instead of wrapping") {
+  CHECK_THROWS_AS(allocate_large(SIZE_MAX, 64), std::bad_alloc);
+  CHECK_THROWS_AS(allocate_large(SIZE_MAX - 4096, 64), std::bad_alloc);
+  CHECK_THROWS_AS(LargeArray<double>(SIZE_MAX / 4), std::bad_alloc);
 }
 
 TEST_CASE("LargeArray: holds n elements, indexable end to end") {
