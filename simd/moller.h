@@ -60,6 +60,8 @@ struct MollerTest {
   [[gnu::always_inline]] inline static Tris broadcast_tri(const MollerBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
+  /// EarlyExit: none here either way (the test has no branch).
+  template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
   /// The lanes of `c` still hit when the upper end shrinks to `upper` (<= the one test()
   /// saw): exactly what test() would have answered for it.
@@ -119,6 +121,7 @@ auto MollerTest<Arch>::broadcast_tri(const MollerBlock<BW>& b, int j, const Rays
 }
 
 template <class Arch>
+template <bool EarlyExit>
 auto MollerTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B zero(0.0f);
   // c = p0 - org, the right-hand side of the system.

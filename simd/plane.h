@@ -45,6 +45,8 @@ struct PlaneTest {
   [[gnu::always_inline]] inline static Tris broadcast_tri(const PlaneBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
+  /// EarlyExit: return as soon as no lane passes the den test (RayBlockKernels::intersect_inline).
+  template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
   /// The lanes of `c` still hit when the upper end shrinks to `upper`.
   [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
@@ -82,12 +84,13 @@ auto PlaneTest<Arch>::broadcast_tri(const PlaneBlock<BW>& b, int j, const Rays&)
 }
 
 template <class Arch>
+template <bool EarlyExit>
 auto PlaneTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B zero(0.0f), one(1.0f);
   // den = n . dir; fails for 0 (parallel ray, degenerate triangle), Inf and NaN (padding).
   const B den = tri.nx * r.dx + tri.ny * r.dy + tri.nz * r.dz;
   M valid = finite_nonzero<Arch>(den);
-  if (xsimd::none(valid)) return {valid, den, den, den};
+  if (EarlyExit && xsimd::none(valid)) return {valid, den, den, den};
   // Ray/plane distance t = n . a / den with a = v0 - org (nearby numbers subtracted
   // first), in [tmin, upper).
   const B ax = tri.v0x - r.ox, ay = tri.v0y - r.oy, az = tri.v0z - r.oz;

@@ -97,6 +97,8 @@ struct WatertightTest {
   [[gnu::always_inline]] inline static Tris broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
+  /// EarlyExit: return as soon as no lane passes the edge and det tests (RayBlockKernels::intersect_inline).
+  template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static Cand test(const Rays& r, const Tris& tri, B upper);
 
   /// The sheared vertices' edge functions U, V, W and the lanes whose signs do not mix
@@ -366,6 +368,7 @@ auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
 }
 
 template <class Arch>
+template <bool EarlyExit>
 auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   M inside;
   Edges e = edges(r, tri, inside);
@@ -374,7 +377,7 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   const B det = e.u + e.v + e.w;
   const B ad = xsimd::abs(det);
   M valid = and_cmp<Cmp::le, Arch>(inside, ad, B(std::numeric_limits<float>::max()));
-  if (xsimd::none(valid)) return {valid, det, det, det, det};
+  if (EarlyExit && xsimd::none(valid)) return {valid, det, det, det, det};
   // Scaled distance t det against [tmin, upper] |det| with det's sign folded in: the
   // oracle's prefilter, which never rejects a lane the quotient would accept.
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;

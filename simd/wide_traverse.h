@@ -465,7 +465,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
       if constexpr (AnyHit) {
         if (count != 0 && Leaf::occluded_inline(pr, blocks, count)) return true;
       } else if (count != 0) {
-        Leaf::intersect_inline(pr, blocks, count, hit);
+        Leaf::template intersect_inline<false>(pr, blocks, count, hit);
         if (hit.t < tmax) {
           tmax = hit.t;
           tmax8 = V8::set1(tmax * pad1);
