@@ -156,6 +156,13 @@ struct WatertightTest {
     else
       return e.u * az + e.v * bz + e.w * cz;
   }
+  /// test<false>() for one ray against an 8-wide block on AVX-512 (Avx512Ymm), written with
+  /// AVX-512VL intrinsics: compares into mask registers (the xsimd AVX2 code it stands for
+  /// uses VEX compares on ymm0-15 and vector masks). The same operations in the same order,
+  /// so the same lanes and values. Returns false, computing nothing, when some lane has an
+  /// edge function exactly 0 (test() redoes those in double).
+  [[gnu::always_inline]] inline static bool test_vl(const Rays& r, const Block& b, B upper, Cand& out,
+                                                    std::uint32_t& bits);
   /// Recomputes the edge functions of the lanes with a zero one in double (exact
   /// products) and returns all three. Out of line and cold: the test stays small enough
   /// to inline, and its hot path keeps the edge functions in registers.
@@ -385,6 +392,50 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   const B ts_s = ts ^ (det & B(-0.0f));
   valid = and_cmp<Cmp::le, Arch>(and_cmp<Cmp::ge, Arch>(valid, ts_s, r.tmin_lo * ad), ts_s, upper * ad);
   return {valid, ts, e.v, e.w, det};
+}
+
+template <class Arch>
+bool WatertightTest<Arch>::test_vl(const Rays& r, const Block& b, B upper, Cand& out, std::uint32_t& bits) {
+  static_assert(W == 8 && kFused, "the AVX-512 8-lane leaf of the single-ray walk");
+  const auto* bytes = reinterpret_cast<const unsigned char*>(b.p);
+  const std::size_t x = r.kx * sizeof(b.p[0][0]), y = r.ky * sizeof(b.p[0][0]), z = r.kz * sizeof(b.p[0][0]);
+  const auto at = [bytes](int k, std::size_t axis) {
+    return _mm256_load_ps(reinterpret_cast<const float*>(bytes + k * sizeof(b.p[0]) + axis));
+  };
+  const __m256 okx = r.okx, oky = r.oky, okz = r.okz, sx = r.sx, sy = r.sy, sz = r.sz;
+  const __m256 akx = _mm256_sub_ps(at(0, x), okx), aky = _mm256_sub_ps(at(0, y), oky), akz = _mm256_sub_ps(at(0, z), okz);
+  const __m256 bkx = _mm256_sub_ps(at(1, x), okx), bky = _mm256_sub_ps(at(1, y), oky), bkz = _mm256_sub_ps(at(1, z), okz);
+  const __m256 ckx = _mm256_sub_ps(at(2, x), okx), cky = _mm256_sub_ps(at(2, y), oky), ckz = _mm256_sub_ps(at(2, z), okz);
+  // shear(): p - s z, fused.
+  const __m256 ax = _mm256_fnmadd_ps(sx, akz, akx), ay = _mm256_fnmadd_ps(sy, akz, aky);
+  const __m256 bx = _mm256_fnmadd_ps(sx, bkz, bkx), by = _mm256_fnmadd_ps(sy, bkz, bky);
+  const __m256 cx = _mm256_fnmadd_ps(sx, ckz, ckx), cy = _mm256_fnmadd_ps(sy, ckz, cky);
+  // edges(): both products rounded.
+  const __m256 eu = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+  const __m256 ev = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+  const __m256 ew = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+  const __m256 zero = _mm256_setzero_ps();
+  constexpr int kNeqUnordered = 0x04, kLe = 0x12, kGe = 0x1d;
+  __mmask8 nz = _mm256_cmp_ps_mask(eu, zero, kNeqUnordered);
+  nz = _mm256_mask_cmp_ps_mask(nz, ev, zero, kNeqUnordered);
+  nz = _mm256_mask_cmp_ps_mask(nz, ew, zero, kNeqUnordered);
+  if (nz != 0xff) [[unlikely]] return false;
+  // same_sign_bit(): (u ^ v) | (u ^ w) has the sign bit clear.
+  const __m256i sx_bits = _mm256_castps_si256(_mm256_or_ps(_mm256_xor_ps(eu, ev), _mm256_xor_ps(eu, ew)));
+  const __mmask8 inside = _mm256_cmpgt_epi32_mask(sx_bits, _mm256_set1_epi32(-1));
+  const __m256 det = _mm256_add_ps(_mm256_add_ps(eu, ev), ew);
+  const __m256 sign = _mm256_set1_ps(-0.0f);
+  const __m256 ad = _mm256_andnot_ps(sign, det);
+  __mmask8 valid = _mm256_mask_cmp_ps_mask(inside, ad, _mm256_set1_ps(std::numeric_limits<float>::max()), kLe);
+  const __m256 az = _mm256_mul_ps(sz, akz), bz = _mm256_mul_ps(sz, bkz), cz = _mm256_mul_ps(sz, ckz);
+  // depth_sum(), fused.
+  const __m256 ts = _mm256_fmadd_ps(ew, cz, _mm256_fmadd_ps(ev, bz, _mm256_mul_ps(eu, az)));
+  const __m256 ts_s = _mm256_xor_ps(ts, _mm256_and_ps(det, sign));
+  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, _mm256_mul_ps(r.tmin_lo, ad), kGe);
+  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, _mm256_mul_ps(upper, ad), kLe);
+  bits = valid;
+  out.t = B(ts), out.u = B(ev), out.v = B(ew), out.den = B(det);
+  return true;
 }
 
 template <class Arch>
