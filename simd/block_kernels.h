@@ -164,8 +164,9 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
     if constexpr (!EarlyExit && Test == TriangleTest::watertight && std::is_same_v<Arch, Avx512Ymm>) {
       // The default configuration's leaf in the walk: the same test in AVX-512VL mask
       // registers (single rays +1-3%); the generic code for the rare exact-zero blocks.
-      if (!T::test_vl(rays, block, upper_b, cand, bits)) [[unlikely]] {
-        cand = T::template test<EarlyExit>(rays, T::load_block(block, rays), upper_b);
+      const auto tri = T::load_block(block, rays);
+      if (!T::test_vl(rays, tri, upper_b, cand, bits)) [[unlikely]] {
+        cand = T::template test<EarlyExit>(rays, tri, upper_b);
         bits = detail::bits_from_mask<Arch>(cand.valid);
       }
     } else {

@@ -161,8 +161,20 @@ struct WatertightTest {
   /// uses VEX compares on ymm0-15 and vector masks). The same operations in the same order,
   /// so the same lanes and values. Returns false, computing nothing, when some lane has an
   /// edge function exactly 0 (test() redoes those in double).
-  [[gnu::always_inline]] inline static bool test_vl(const Rays& r, const Block& b, B upper, Cand& out,
+  [[gnu::always_inline]] inline static bool test_vl(const Rays& r, const Tris& tri, B upper, Cand& out,
                                                     std::uint32_t& bits);
+  /// The sheared x and y of the three vertices.
+  struct Sheared {
+    B ax, ay, bx, by, cx, cy;
+  };
+  /// Shears the vertices (so the ray runs along +z; the z scaling is deferred to the depth
+  /// test) and returns their 2D edge functions at the origin, both products rounded: the
+  /// first steps of edges() and test_vl().
+  [[gnu::always_inline]] inline static Edges edge_functions(const Rays& r, const Tris& tri, Sheared& s) {
+    s = {shear(tri.akx, r.sx, tri.akz), shear(tri.aky, r.sy, tri.akz), shear(tri.bkx, r.sx, tri.bkz),
+         shear(tri.bky, r.sy, tri.bkz), shear(tri.ckx, r.sx, tri.ckz), shear(tri.cky, r.sy, tri.ckz)};
+    return {s.cx * s.by - s.cy * s.bx, s.ax * s.cy - s.ay * s.cx, s.bx * s.ay - s.by * s.ax};
+  }
   /// Recomputes the edge functions of the lanes with a zero one in double (exact
   /// products) and returns all three. Out of line and cold: the test stays small enough
   /// to inline, and its hot path keeps the edge functions in registers.
@@ -334,15 +346,8 @@ auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, co
 template <class Arch>
 auto WatertightTest<Arch>::edges(const Rays& r, const Tris& tri, M& inside) -> Edges {
   const B zero(0.0f);
-  // Shear so the ray runs along +z; the z scaling is deferred to the depth test.
-  const B ax = shear(tri.akx, r.sx, tri.akz);
-  const B ay = shear(tri.aky, r.sy, tri.akz);
-  const B bx = shear(tri.bkx, r.sx, tri.bkz);
-  const B by = shear(tri.bky, r.sy, tri.bkz);
-  const B cx = shear(tri.ckx, r.sx, tri.ckz);
-  const B cy = shear(tri.cky, r.sy, tri.ckz);
-  // Scaled barycentrics: 2D edge functions at the origin, both products rounded.
-  Edges e{cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax};
+  Sheared s;
+  Edges e = edge_functions(r, tri, s);
   // Mixed signs: the origin is outside (both facings accepted). With no edge function
   // exactly 0 the signs are the sign bits (a NaN lane fails on det below). An exact 0 may
   // hide a nonzero one: those lanes are redone in double, and signs are then compared as
@@ -350,7 +355,7 @@ auto WatertightTest<Arch>::edges(const Rays& r, const Tris& tri, M& inside) -> E
   if (all_nonzero<Arch>(e.u, e.v, e.w)) [[likely]] {
     inside = same_sign_bit<Arch>(e.u, e.v, e.w);
   } else {
-    e = fallback(ax, ay, bx, by, cx, cy, e.u, e.v, e.w);
+    e = fallback(s.ax, s.ay, s.bx, s.by, s.cx, s.cy, e.u, e.v, e.w);
     inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
   }
   return e;
@@ -395,46 +400,28 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
 }
 
 template <class Arch>
-bool WatertightTest<Arch>::test_vl(const Rays& r, const Block& b, B upper, Cand& out, std::uint32_t& bits) {
+bool WatertightTest<Arch>::test_vl(const Rays& r, const Tris& tri, B upper, Cand& out, std::uint32_t& bits) {
   static_assert(W == 8 && kFused, "the AVX-512 8-lane leaf of the single-ray walk");
-  const auto* bytes = reinterpret_cast<const unsigned char*>(b.p);
-  const std::size_t x = r.kx * sizeof(b.p[0][0]), y = r.ky * sizeof(b.p[0][0]), z = r.kz * sizeof(b.p[0][0]);
-  const auto at = [bytes](int k, std::size_t axis) {
-    return _mm256_load_ps(reinterpret_cast<const float*>(bytes + k * sizeof(b.p[0]) + axis));
-  };
-  const __m256 okx = r.okx, oky = r.oky, okz = r.okz, sx = r.sx, sy = r.sy, sz = r.sz;
-  const __m256 akx = _mm256_sub_ps(at(0, x), okx), aky = _mm256_sub_ps(at(0, y), oky), akz = _mm256_sub_ps(at(0, z), okz);
-  const __m256 bkx = _mm256_sub_ps(at(1, x), okx), bky = _mm256_sub_ps(at(1, y), oky), bkz = _mm256_sub_ps(at(1, z), okz);
-  const __m256 ckx = _mm256_sub_ps(at(2, x), okx), cky = _mm256_sub_ps(at(2, y), oky), ckz = _mm256_sub_ps(at(2, z), okz);
-  // shear(): p - s z, fused.
-  const __m256 ax = _mm256_fnmadd_ps(sx, akz, akx), ay = _mm256_fnmadd_ps(sy, akz, aky);
-  const __m256 bx = _mm256_fnmadd_ps(sx, bkz, bkx), by = _mm256_fnmadd_ps(sy, bkz, bky);
-  const __m256 cx = _mm256_fnmadd_ps(sx, ckz, ckx), cy = _mm256_fnmadd_ps(sy, ckz, cky);
-  // edges(): both products rounded.
-  const __m256 eu = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
-  const __m256 ev = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
-  const __m256 ew = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
-  const __m256 zero = _mm256_setzero_ps();
+  Sheared s;
+  const Edges e = edge_functions(r, tri, s);
+  const __m256 eu = e.u, ev = e.v, ew = e.w, zero = _mm256_setzero_ps();
   constexpr int kNeqUnordered = 0x04, kLe = 0x12, kGe = 0x1d;
+  // all_nonzero(), same_sign_bit() and test()'s and_cmp chain, in mask registers.
   __mmask8 nz = _mm256_cmp_ps_mask(eu, zero, kNeqUnordered);
   nz = _mm256_mask_cmp_ps_mask(nz, ev, zero, kNeqUnordered);
   nz = _mm256_mask_cmp_ps_mask(nz, ew, zero, kNeqUnordered);
   if (nz != 0xff) [[unlikely]] return false;
-  // same_sign_bit(): (u ^ v) | (u ^ w) has the sign bit clear.
-  const __m256i sx_bits = _mm256_castps_si256(_mm256_or_ps(_mm256_xor_ps(eu, ev), _mm256_xor_ps(eu, ew)));
-  const __mmask8 inside = _mm256_cmpgt_epi32_mask(sx_bits, _mm256_set1_epi32(-1));
-  const __m256 det = _mm256_add_ps(_mm256_add_ps(eu, ev), ew);
-  const __m256 sign = _mm256_set1_ps(-0.0f);
-  const __m256 ad = _mm256_andnot_ps(sign, det);
+  const __m256i signs = _mm256_castps_si256(_mm256_or_ps(_mm256_xor_ps(eu, ev), _mm256_xor_ps(eu, ew)));
+  const __mmask8 inside = _mm256_cmpgt_epi32_mask(signs, _mm256_set1_epi32(-1));
+  const B det = e.u + e.v + e.w;
+  const B ad = xsimd::abs(det);
   __mmask8 valid = _mm256_mask_cmp_ps_mask(inside, ad, _mm256_set1_ps(std::numeric_limits<float>::max()), kLe);
-  const __m256 az = _mm256_mul_ps(sz, akz), bz = _mm256_mul_ps(sz, bkz), cz = _mm256_mul_ps(sz, ckz);
-  // depth_sum(), fused.
-  const __m256 ts = _mm256_fmadd_ps(ew, cz, _mm256_fmadd_ps(ev, bz, _mm256_mul_ps(eu, az)));
-  const __m256 ts_s = _mm256_xor_ps(ts, _mm256_and_ps(det, sign));
-  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, _mm256_mul_ps(r.tmin_lo, ad), kGe);
-  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, _mm256_mul_ps(upper, ad), kLe);
+  const B ts = depth_sum(e, r.sz * tri.akz, r.sz * tri.bkz, r.sz * tri.ckz);
+  const B ts_s = ts ^ (det & B(-0.0f));
+  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, r.tmin_lo * ad, kGe);
+  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, upper * ad, kLe);
   bits = valid;
-  out.t = B(ts), out.u = B(ev), out.v = B(ew), out.den = B(det);
+  out.t = ts, out.u = e.v, out.v = e.w, out.den = det;
   return true;
 }
 
