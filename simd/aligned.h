@@ -4,6 +4,8 @@
 #pragma once
 #include <cstddef>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/large_alloc.h"  // declarations only
@@ -25,6 +27,18 @@ struct AlignedAllocator {
     return static_cast<T*>(core::allocate_large(n * sizeof(T), kAlign));
   }
   void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign); }
+  /// resize() and the count constructor default-initialise: trivial elements (nodes, triangle
+  /// blocks) are left to their writer, which fills them in parallel (a serial zero fill of
+  /// the blocks was 2% of a one-thread build and 7% of a 16-thread one); types with a
+  /// constructor (BBox) still run it.
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <class U>
   bool operator==(const AlignedAllocator<U>&) const noexcept { return true; }
 };

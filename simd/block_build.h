@@ -21,7 +21,8 @@ constexpr std::size_t blocks_for(std::size_t n) {
 /// are padding: NaN geometry, prim = kInvalidPrim. A zero-area triangle (the watertight
 /// oracle's first check) becomes a NaN lane with its prim id, so it is never hit; moller and
 /// plane miss it through their own arithmetic (det = 0, resp. PlaneTriangle's "never").
-/// Instantiated for W = 4, 8, 16 and every test.
+/// Writes every byte of the blocks (out may be uninitialised). Instantiated for W = 4, 8,
+/// 16 and every test.
 template <TriangleTest Test, int W>
 void pack_blocks(const float* xyz, const std::uint32_t* prim_ids, std::size_t n, BlockFor<Test, W>* out);
 

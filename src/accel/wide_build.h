@@ -25,8 +25,10 @@ namespace volley::accel {
 /// in the order the collapse meets them. Unused child slots are inert.
 ///
 /// Triangle i (an index into bvh.prim_index's range) has vertices xyz[9i .. 9i + 9) and id
-/// ids[i]. Block packing runs in parallel on oneTBB. Throws std::length_error when a leaf
-/// needs more than wide_ref::kMaxLeafBlocks blocks or the BVH more than kMaxBlocks.
+/// ids[i]. The collapse plan, the layout (below the top three wide levels) and the block
+/// packing run in parallel on oneTBB; the result is the same for any number of threads.
+/// Throws std::length_error when a leaf needs more than wide_ref::kMaxLeafBlocks blocks, the
+/// BVH more than kMaxBlocks blocks or kMaxNodes nodes.
 template <TriangleTest Test, int W>
 simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids,
                            simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,
