@@ -369,9 +369,10 @@ int run(const Args& a) {
   std::printf("embree %d.%d.%d: build quality %s, scene flags %s, context %s, built in %.3f s\n", RTC_VERSION_MAJOR,
               RTC_VERSION_MINOR, RTC_VERSION_PATCH, to_string(config.quality), config.robust ? "ROBUST" : "NONE",
               a.coherent ? "COHERENT" : "INCOHERENT", embree.build_seconds());
-  std::printf("volley: test %s, isa %s, %.1f bytes/triangle, built in %.3f s\n",
+  std::printf("volley: test %s, isa %s, %.1f bytes/triangle, SAH cost %.2f, built in %.3f s\n",
               std::string(to_string(info.test)).c_str(), std::string(to_string(info.isa)).c_str(),
-              double(info.bytes) / double(std::max<std::size_t>(1, info.triangles)), info.build_seconds);
+              double(info.bytes) / double(std::max<std::size_t>(1, info.triangles)), info.sah_cost,
+              info.build_seconds);
 
   // One untimed pass each first: page faults and cold caches are nobody's rate.
   for (Result& r : results) {

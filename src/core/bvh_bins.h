@@ -93,10 +93,32 @@ struct BinGrid {
   bool any_active() const { return active[0] || active[1] || active[2]; }
 };
 
+// Clears flush-to-zero and denormals-are-zero (MXCSR bits 15 and 6) for its scope and
+// restores them after. Bins carry their counts as subnormal patterns, which a maxps reads as
+// 0 under DAZ; and Embree sets both on the oneTBB threads it runs on (and asks applications
+// to). Each build task and binning chunk holds one: two MXCSR writes per task, and only on
+// threads that had the bits set.
+class ExactSubnormals {
+ public:
+  ExactSubnormals() : csr_(_mm_getcsr()) {
+    if (csr_ & kFlushBits) _mm_setcsr(csr_ & ~kFlushBits);
+  }
+  ~ExactSubnormals() {
+    if (csr_ & kFlushBits) _mm_setcsr(csr_);
+  }
+  ExactSubnormals(const ExactSubnormals&) = delete;
+  ExactSubnormals& operator=(const ExactSubnormals&) = delete;
+
+ private:
+  static constexpr unsigned kFlushBits = 0x8040u;
+  unsigned csr_;
+};
+
 // A bin: the bounds of its primitives in lanes x, y, z of a Box4 and their count, as
 // integer bits, in lane 3 of hi. Items' hi has 0 in lane 3, and maxps keeps a positive
-// subnormal pattern against +0, so the count survives the bound update and one integer
-// add bumps it: no separate counter to load, increment and store per axis. Exact while a
+// subnormal pattern against +0 (with DAZ clear: ExactSubnormals), so the count survives the
+// bound update and one integer add bumps it: no separate counter to load, increment and
+// store per axis. Exact while a
 // count stays below 2^23 (a subnormal pattern): add() sees at most bvh_build.cpp's kParallelBinning items.
 inline Box4 empty_bin() {
   Box4 b;

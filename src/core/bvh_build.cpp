@@ -291,6 +291,7 @@ class Splitter {
     bins_ = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::uint32_t>(t.begin, t.end, kBinChunk), empty,
         [&](const tbb::blocked_range<std::uint32_t>& r, Bins acc) {
+          const ExactSubnormals exact;
           acc.add(items_, r.begin(), r.end(), grid);
           return acc;
         },
@@ -423,6 +424,7 @@ class SubtreeBuilder {
   SubtreeBuilder(const BvhBuildOptions& options, Item* items) : splitter_(options, items) {}
 
   std::vector<BvhNode> build(Task root, const BBox& box) {
+    const ExactSubnormals exact;
     nodes_.reserve(2 * std::size_t{root.end - root.begin} - 1);
     nodes_.push_back({box, 0, 0});
     root.node = 0;
@@ -476,6 +478,7 @@ class Builder {
     const Scan total = tbb::parallel_scan(
         tbb::blocked_range<std::uint32_t>(0, n_, kInputChunk), Scan{},
         [&](const tbb::blocked_range<std::uint32_t>& r, Scan sum, bool is_final) {
+          const ExactSubnormals exact;
           for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
             const Classified p = classify(boxes[i]);
             if (is_final) {
@@ -560,6 +563,7 @@ class Builder {
 
   // Recursion depth <= tree depth < kBvhMaxDepth.
   void build_top(TopNode& node, const Task& t) {
+    const ExactSubnormals exact;
     const std::uint32_t count = t.end - t.begin;
     if (count < kTaskNode || !t.spatial) {
       node.subtree = SubtreeBuilder(opt_, items_.get()).build(t, node.box);

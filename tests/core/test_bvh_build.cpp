@@ -2,6 +2,8 @@
 // leaves sized to blocks (BvhBuildOptions::leaf_block_width).
 #include <doctest/doctest.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+#include <xmmintrin.h>
 
 #include <algorithm>
 #include <cmath>
@@ -94,6 +96,26 @@ TEST_CASE("bvh build: the same tree for 1 and 2 threads") {
     CHECK(identical(one, two));
     CHECK(identical(one, build_with_threads(boxes, opt, 2)));  // and again: no run-to-run variation
     CHECK(one.prim_index.size() == boxes.size());
+  }
+}
+
+TEST_CASE("bvh build: the same tree with flush-to-zero and denormals-are-zero set") {
+  // A build on threads with DAZ once read every bin count as 0 (counts are subnormal
+  // patterns in a float lane) and chose its planes blind. oneTBB runs tasks under the FP
+  // settings captured when their arena was made (as Embree's were with DAZ on, in the test
+  // that found this): made here with DAZ on this thread.
+  const std::vector<BBox> boxes = clustered_boxes(100000, 200, 3);
+  const BvhBuildOptions opt = wide16_options(8);
+  for (int threads : {1, 2}) {
+    CAPTURE(threads);
+    const Bvh plain = build_with_threads(boxes, opt, threads);
+    const unsigned csr = _mm_getcsr();
+    _mm_setcsr(csr | 0x8040u);  // bit 15 FTZ, bit 6 DAZ
+    Bvh daz;
+    tbb::task_arena arena(threads);
+    arena.execute([&] { daz = volley::core::build_bvh(boxes, opt); });
+    _mm_setcsr(csr);
+    CHECK(identical(plain, daz));
   }
 }
 
