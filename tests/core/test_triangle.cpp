@@ -648,3 +648,37 @@ TEST_CASE("triangle: watertight leaks no ray aimed at shared vertices and edges 
 }
 
 }  // namespace
+
+TEST_CASE("triangle: make_woop_ray picks the axes of its branching definition for every special direction") {
+  // The axis choice is integer arithmetic (no branches); this is the definition it encodes:
+  // kz the largest |component| (first of ties by the comparisons below), kx, ky the next
+  // axes cyclically, swapped when dir[kz] < 0. NaN compares false everywhere.
+  auto expected = [](const Vec3f& dir) {
+    const float ax = std::abs(dir.x), ay = std::abs(dir.y), az = std::abs(dir.z);
+    const int kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    int kx = kz + 1 == 3 ? 0 : kz + 1;
+    int ky = kx + 1 == 3 ? 0 : kx + 1;
+    if (dir[kz] < 0) std::swap(kx, ky);
+    return std::array<int, 3>{kx, ky, kz};
+  };
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const std::array<float, 11> values = {0.0f, -0.0f, 1.0f, -1.0f, 2.0f, -2.0f, inf, -inf, nan, 1e-45f, -1e-45f};
+  int checked = 0;
+  for (float x : values)
+    for (float y : values)
+      for (float z : values) {
+        const Vec3f dir(x, y, z);
+        const auto w = volley::core::make_woop_ray(dir);
+        const auto e = expected(dir);
+        CAPTURE(x);
+        CAPTURE(y);
+        CAPTURE(z);
+        CHECK(w.kx == e[0]);
+        CHECK(w.ky == e[1]);
+        CHECK(w.kz == e[2]);
+        const float sz = 1.0f / dir[e[2]];
+        CHECK((w.sz == sz || (std::isnan(w.sz) && std::isnan(sz))));
+        ++checked;
+      }
+  CHECK(checked == 1331);
+}
