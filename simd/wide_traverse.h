@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include <xsimd/xsimd.hpp>
@@ -213,6 +214,8 @@ struct WideStackItem {
   std::uint32_t ref;
   float entry;
 };
+static_assert(sizeof(WideStackItem<xsimd::avx2>) == 8 && offsetof(WideStackItem<xsimd::avx2>, entry) == 4,
+              "stack_word packs an item as one little-endian 64-bit word");
 
 /// A stack entry of the frustum walk: a subtree, the packet's lower bound of the entry
 /// distances into it, and (leaves) the lanes whose own box test passed.
@@ -255,6 +258,27 @@ float reduce_max(FloatB<Arch> v) {
   m = _mm_max_ps(m, _mm_movehl_ps(m, m));
   m = _mm_max_ss(m, _mm_shuffle_ps(m, m, 1));
   return _mm_cvtss_f32(m);
+}
+
+/// A stack item (WideStackItem: ref, then entry) as one 64-bit word: ref in the low half,
+/// the entry's bits in the high.
+[[gnu::always_inline]] inline std::uint64_t stack_word(std::uint32_t ref, float entry) {
+  return (std::uint64_t{std::bit_cast<std::uint32_t>(entry)} << 32) | ref;
+}
+
+/// Sorts stack words far to near, stably (odd-even transposition: compare-exchanges of
+/// neighbours, swapping only when strictly out of order, as the insertion sort): w[0] is
+/// the farthest.
+template <int Count>
+[[gnu::always_inline]] inline void sort_far_first(std::uint64_t* w) {
+  auto entry = [](std::uint64_t x) { return std::bit_cast<float>(static_cast<std::uint32_t>(x >> 32)); };
+  for (int round = 0; round < Count; ++round) {
+    for (int k = round & 1; k + 1 < Count; k += 2) {
+      const bool swap = entry(w[k]) < entry(w[k + 1]);
+      const std::uint64_t a = swap ? w[k + 1] : w[k], b = swap ? w[k] : w[k + 1];
+      w[k] = a, w[k + 1] = b;
+    }
+  }
 }
 
 /// Entries a traversal stack needs: every wide level pushes at most N - 1 entries more
@@ -440,7 +464,30 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
           ref = swap ? cj : ci;
           continue;
         }
-        // Three or more: push all, sort the pushed run far to near (insertion sort of at
+        if (std::popcount(bits) <= 2) {
+          // Three or four (90% of the nodes with three or more hit children): sorted in
+          // registers by a stable network of compare-exchanges (cmov: no branch on the
+          // distances, which the insertion sort below mispredicts): primary single rays
+          // +7-9%, diffuse +1.5-2.5%. Five too: no faster.
+          std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]), 0, 0};
+          const int k = std::countr_zero(bits);
+          w[2] = detail::stack_word(node.child[k], dist[k]);
+          bits &= bits - 1;
+          int n = 3;
+          if (bits == 0) {
+            detail::sort_far_first<3>(w);
+          } else {
+            const int l = std::countr_zero(bits);
+            w[3] = detail::stack_word(node.child[l], dist[l]);
+            detail::sort_far_first<4>(w);
+            n = 4;
+          }
+          std::memcpy(&stack[size], w, 8 * static_cast<std::size_t>(n - 1));
+          size += n - 1;
+          ref = static_cast<std::uint32_t>(w[n - 1]);
+          continue;
+        }
+        // Five or more: push all, sort the pushed run far to near (insertion sort of at
         // most eight), and continue with the nearest (the top).
         const int base = size;
         stack[size++] = {node.child[i], dist[i]};
