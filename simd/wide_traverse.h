@@ -466,9 +466,11 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         }
         if (std::popcount(bits) <= 2) {
           // Three or four (90% of the nodes with three or more hit children): sorted in
-          // registers by a stable network of compare-exchanges (cmov: no branch on the
-          // distances, which the insertion sort below mispredicts): primary single rays
-          // +7-9%, diffuse +1.5-2.5%. Five too: no faster.
+          // registers by a stable network of compare-exchanges, the nearest reference never
+          // stored and reloaded as in the insertion sort below: primary single rays +7-9%,
+          // diffuse +1.5-2.5% (AVX2 alike). GCC compiles each exchange to a short branch;
+          // branch-free (an xor swap under a mask) was 1-7% slower: the nearest then waits
+          // for every exchange. A network for five: no faster.
           std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]), 0, 0};
           const int k = std::countr_zero(bits);
           w[2] = detail::stack_word(node.child[k], dist[k]);
