@@ -207,7 +207,6 @@ struct LocalTree {
 // A wide node of the top levels: its children in slot order, each interior one either a
 // top node again or a subtree walked alone.
 struct TopNode {
-  std::uint32_t binary = 0;
   Kids kids;
   std::unique_ptr<TopNode> top[N];
   std::unique_ptr<LocalTree> local[N];
@@ -332,7 +331,6 @@ class WideLayout {
   // depth kTopDepth.
   void plan_top(TopNode& t, std::uint32_t n, std::size_t depth,
                 std::vector<std::pair<std::uint32_t, std::unique_ptr<LocalTree>*>>& jobs) {
-    t.binary = n;
     t.kids = ordered_kids(n);
     for (int k = 0; k < t.kids.size; ++k) {
       const std::uint32_t kid = t.kids.id[k];
