@@ -124,7 +124,8 @@ struct WideKernels {
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   template <bool AnyHit, bool NoZero>
-  static bool walk(const View& bvh, const PreparedRay& ray, float inv[3], std::uint32_t start, Hit& hit);
+  static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv4, const float inv[3], std::uint32_t start,
+                   Hit& hit);
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
@@ -169,6 +170,11 @@ struct Lanes8<Arch, true> {
   using V = __m256;
   static V load(const float* p) { return _mm256_load_ps(p); }
   static V set1(float x) { return _mm256_set1_ps(x); }
+  /// Lane L of v in every lane, from the register (no store and reload).
+  template <int L>
+  static V lane(__m128 v) {
+    return _mm256_broadcastss_ps(L == 0 ? v : _mm_shuffle_ps(v, v, L * 0x55));
+  }
   static V sub(V a, V b) { return _mm256_sub_ps(a, b); }
   static V mul(V a, V b) { return _mm256_mul_ps(a, b); }
   /// The ISA has FMA (AVX2 + FMA, AVX-512): slab distances in one rounding (walk).
@@ -193,6 +199,11 @@ struct Lanes8<Arch, false> {
   };
   static V load(const float* p) { return {_mm_load_ps(p), _mm_load_ps(p + 4)}; }
   static V set1(float x) { return {_mm_set1_ps(x), _mm_set1_ps(x)}; }
+  template <int L>
+  static V lane(__m128 v) {
+    const __m128 b = _mm_shuffle_ps(v, v, L * 0x55);
+    return {b, b};
+  }
   static V sub(V x, V y) { return {_mm_sub_ps(x.a, y.a), _mm_sub_ps(x.b, y.b)}; }
   static V mul(V x, V y) { return {_mm_mul_ps(x.a, y.a), _mm_mul_ps(x.b, y.b)}; }
   static constexpr bool kFma = false;
@@ -311,14 +322,16 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
   // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
   // for the three; lane 3 is 1 / tmax, unused).
   alignas(16) float inv[4];
-  _mm_store_ps(inv, _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax));
-  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
-  return walk<AnyHit, false>(bvh, pr, inv, start, hit);
+  const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax);
+  _mm_store_ps(inv, inv4);
+  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0) return walk<AnyHit, true>(bvh, pr, inv4, inv, start, hit);
+  return walk<AnyHit, false>(bvh, pr, inv4, inv, start, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool NoZero>
-bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, float inv[3], std::uint32_t start,
+bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv4, const float inv[3],
+                                           std::uint32_t start,
                                            Hit& hit) {
   using V8 = detail::Lanes8<Arch>;
   using Leaf = RayBlockKernels<SingleArch, Test>;
@@ -331,7 +344,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   const int fx = near_plane[0] ^ 1, fy = near_plane[1] ^ 1, fz = near_plane[2] ^ 1;
   const int nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
   const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
-  const auto ix = V8::set1(inv[0]), iy = V8::set1(inv[1]), iz = V8::set1(inv[2]);
+  const auto ix = V8::template lane<0>(inv4), iy = V8::template lane<1>(inv4), iz = V8::template lane<2>(inv4);
   const auto tmin = V8::set1(ray.tmin);
   const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
   // Far distances use the reciprocal times the exit padding, rounded once per ray:
@@ -339,7 +352,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   // oracle's fl(fl(d * inv) * pad), so the 2 gamma(3) margin still covers the rounding of
   // both ends (the padding was sized for the sub, reciprocal and product roundings), and
   // the node test loses a multiply from its longest dependency chain. ±inf stays ±inf.
-  const auto fix = V8::set1(inv[0] * pad1), fiy = V8::set1(inv[1] * pad1), fiz = V8::set1(inv[2] * pad1);
+  const __m128 finv4 = _mm_mul_ps(inv4, _mm_set1_ps(pad1));
+  const auto fix = V8::template lane<0>(finv4), fiy = V8::template lane<1>(finv4), fiz = V8::template lane<2>(finv4);
   // With FMA and no zero direction component, a slab distance is one fused operation,
   // b inv - c, where c is org inv rounded outwards (up for near planes, down for far ones)
   // once per ray. Against (b - org) inv that moves near distances down and far ones up by a
@@ -356,13 +370,12 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
     const __m128 org = _mm_loadu_ps(ray.org), sign = _mm_set1_ps(-0.0f);
     // (Robust = false: c = p, no widening, as it has no padding.)
     const __m128 rel = _mm_set1_ps(Robust ? 0x1p-22f : 0.0f), tiny = _mm_set1_ps(Robust ? 0x1p-149f : 0.0f);
-    const __m128 pn = _mm_mul_ps(org, _mm_loadu_ps(inv));
-    const __m128 pf = _mm_mul_ps(org, _mm_mul_ps(_mm_loadu_ps(inv), _mm_set1_ps(pad1)));
-    alignas(16) float cn[4], cf[4];
-    _mm_store_ps(cn, _mm_add_ps(pn, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pn), rel), tiny)));
-    _mm_store_ps(cf, _mm_sub_ps(pf, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pf), rel), tiny)));
-    cnx = V8::set1(cn[0]), cny = V8::set1(cn[1]), cnz = V8::set1(cn[2]);
-    cfx = V8::set1(cf[0]), cfy = V8::set1(cf[1]), cfz = V8::set1(cf[2]);
+    const __m128 pn = _mm_mul_ps(org, inv4);
+    const __m128 pf = _mm_mul_ps(org, finv4);
+    const __m128 cn = _mm_add_ps(pn, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pn), rel), tiny));
+    const __m128 cf = _mm_sub_ps(pf, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pf), rel), tiny));
+    cnx = V8::template lane<0>(cn), cny = V8::template lane<1>(cn), cnz = V8::template lane<2>(cn);
+    cfx = V8::template lane<0>(cf), cfy = V8::template lane<1>(cf), cfz = V8::template lane<2>(cf);
   }
 
   // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
