@@ -19,22 +19,24 @@ mkdir -p "$RAYS" out
 best_min() { sort -g | head -1; }
 best_max() { sort -g | tail -1; }
 
-# "s" of `volley info`'s build line, best of R, on the first $1 cores.
+# "s" of `volley info`'s build line for scene $1 on the first $2 cores, best of R.
 build_s() {
   for _ in $(seq "$R"); do
-    taskset -c "0-$(($1 - 1))" "$B/volley" info "$2" --scenes "$SCENES" | sed -nE 's/^build +([0-9.]+) s.*/\1/p'
+    taskset -c "0-$(($2 - 1))" "$B/volley" info "$1" --scenes "$SCENES" | sed -nE 's/^build +([0-9.]+) s.*/\1/p'
   done | best_min
 }
-# Seconds of a render (its summary line), best of R.
+# Seconds of a render of scene $1 on $2 threads (its summary line), best of R.
 render_s() {
   for _ in $(seq "$R"); do
-    "$B/volley" render "$2" --scenes "$SCENES" --spp "$SPP" --threads "$1" -o out/scaling.png 2>&1 |
+    "$B/volley" render "$1" --scenes "$SCENES" --spp "$SPP" --threads "$2" -o out/scaling.png 2>&1 |
       sed -nE 's/.* rays in ([0-9.]+) s,.*/\1/p'
   done | best_min
 }
-# Mrays/s of tracing a ray file, best of R repetitions inside one run.
+# Mrays/s of tracing scene $1 with ray file $2 and options $3 on $4 threads, best of R
+# repetitions inside one run.
 trace_mrays() {
-  "$B/volley" trace "$2" --scenes "$SCENES" --rays "$3" --threads "$1" --reps "$R" $4 2>&1 |
+  # shellcheck disable=SC2086  # $3 is a list of options
+  "$B/volley" trace "$1" --scenes "$SCENES" --rays "$2" --threads "$4" --reps "$R" $3 2>&1 |
     sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p'
 }
 
@@ -46,27 +48,26 @@ row() {  # label threads value unit base higher_is_better
   awk -v l="$1" -v t="$2" -v v="$3" -v u="$4" -v b="$5" -v h="$6" 'BEGIN {
     s = h ? v / b : b / v; printf "| %s | %d | %s %s | %.2f | %.2f |\n", l, t, v, u, s, s / t }'
 }
-for scene in bench/embree/kitchen.json bench/embree/conference.json; do
-  base=""
+# One row per thread count: label $1, unit $2, $3 = 1 when higher is better, then a
+# command that prints the value given the thread count as its last argument.
+sweep() {
+  local label=$1 unit=$2 higher=$3 base="" t v
+  shift 3
   for t in $THREADS; do
-    v=$(build_s "$t" "$scene"); base=${base:-$v}
-    row "build $(basename "$scene" .json)" "$t" "$v" s "$base" 0
+    v=$("$@" "$t")
+    base=${base:-$v}
+    row "$label" "$t" "$v" "$unit" "$base" "$higher"
   done
+}
+for scene in bench/embree/kitchen.json bench/embree/conference.json; do
+  sweep "build $(basename "$scene" .json)" s 0 build_s "$scene"
 done
 for scene in scenes/sponza.json bench/embree/conference.json; do
-  base=""
-  for t in $THREADS; do
-    v=$(render_s "$t" "$scene"); base=${base:-$v}
-    row "render $(basename "$scene" .json), $SPP spp" "$t" "$v" s "$base" 0
-  done
+  sweep "render $(basename "$scene" .json), $SPP spp" s 0 render_s "$scene"
 done
 for spec in "kitchen diffuse single" "kitchen shadow single --occluded" "conference primary packet"; do
   read -r n w mode extra <<< "$spec"
   scene=bench/embree/$n.json
   [ -f "$RAYS/${n}_$w.vray" ] || "$B/volley" rays "$scene" --scenes "$SCENES" --workload "$w" -o "$RAYS/${n}_$w.vray" >/dev/null
-  base=""
-  for t in $THREADS; do
-    v=$(trace_mrays "$t" "$scene" "$RAYS/${n}_$w.vray" "--mode $mode ${extra:-}"); base=${base:-$v}
-    row "trace $n $w ($mode)" "$t" "$v" Mrays/s "$base" 1
-  done
+  sweep "trace $n $w ($mode)" Mrays/s 1 trace_mrays "$scene" "$RAYS/${n}_$w.vray" "--mode $mode ${extra:-}"
 done
