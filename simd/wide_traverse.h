@@ -324,15 +324,15 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
   alignas(16) float inv[4];
   const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax);
   _mm_store_ps(inv, inv4);
-  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0) return walk<AnyHit, true>(bvh, pr, inv4, inv, start, hit);
+  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0)
+    return walk<AnyHit, true>(bvh, pr, inv4, inv, start, hit);
   return walk<AnyHit, false>(bvh, pr, inv4, inv, start, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool NoZero>
 bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv4, const float inv[3],
-                                           std::uint32_t start,
-                                           Hit& hit) {
+                                           std::uint32_t start, Hit& hit) {
   using V8 = detail::Lanes8<Arch>;
   using Leaf = RayBlockKernels<SingleArch, Test>;
   static_assert(N == 8, "the single-ray node test reads eight children");
@@ -484,7 +484,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
           // diffuse +1.5-2.5% (AVX2 alike). GCC compiles each exchange to a short branch;
           // branch-free (an xor swap under a mask) was 1-7% slower: the nearest then waits
           // for every exchange. A network for five: no faster.
-          std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]), 0, 0};
+          std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]),
+                                0, 0};
           const int k = std::countr_zero(bits);
           w[2] = detail::stack_word(node.child[k], dist[k]);
           bits &= bits - 1;

@@ -317,7 +317,10 @@ class WideLayout {
       node.child[k] = ref::kLeafBit | (static_cast<std::uint32_t>(blocks) << ref::kCountShift) |
                       static_cast<std::uint32_t>(next_block);
       const LeafJob job{kids.id[k], static_cast<std::uint32_t>(next_block)};
-      if (leaves) leaves->push_back(job); else *leaf_out++ = job;
+      if (leaves)
+        leaves->push_back(job);
+      else
+        *leaf_out++ = job;
       next_block += blocks;
       const double area = kid.box.half_area();
       stats.leaf_area_tris += area * kid.count;

@@ -634,8 +634,8 @@ class Builder {
     const __m128 upper = _mm_loadu_ps(&b.lo.z);
     const __m128 hi = _mm_and_ps(_mm_shuffle_ps(upper, upper, _MM_SHUFFLE(0, 3, 2, 1)), xyz_mask());
     const __m128 c = center4(lo, hi);  // BBox::center()
-    const __m128 ok = _mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), c),
-                                                                      _mm_set1_ps(kInf)));
+    const __m128 ok =
+        _mm_and_ps(_mm_cmple_ps(lo, hi), _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), c), _mm_set1_ps(kInf)));
     return {lo, hi, c, (_mm_movemask_ps(ok) & 7) == 7};
   }
 
