@@ -124,8 +124,7 @@ struct WideKernels {
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   template <bool AnyHit, bool NoZero>
-  static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv4, const float inv[3], std::uint32_t start,
-                   Hit& hit);
+  static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv, std::uint32_t start, Hit& hit);
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
@@ -321,30 +320,28 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Prepar
   if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return false;
   // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
   // for the three; lane 3 is 1 / tmax, unused).
-  alignas(16) float inv[4];
-  const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax);
-  _mm_store_ps(inv, inv4);
-  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0)
-    return walk<AnyHit, true>(bvh, pr, inv4, inv, start, hit);
-  return walk<AnyHit, false>(bvh, pr, inv4, inv, start, hit);
+  const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax);
+  if ((_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
+  return walk<AnyHit, false>(bvh, pr, inv, start, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool NoZero>
-bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv4, const float inv[3],
-                                           std::uint32_t start, Hit& hit) {
+bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv, std::uint32_t start,
+                                           Hit& hit) {
   using V8 = detail::Lanes8<Arch>;
   using Leaf = RayBlockKernels<SingleArch, Test>;
   static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;
   // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
   // far the other.
+  const int negative = _mm_movemask_ps(inv);
   int near_plane[3];
-  for (int a = 0; a < 3; ++a) near_plane[a] = 2 * a + (std::signbit(inv[a]) ? 1 : 0);
+  for (int a = 0; a < 3; ++a) near_plane[a] = 2 * a + ((negative >> a) & 1);
   const int fx = near_plane[0] ^ 1, fy = near_plane[1] ^ 1, fz = near_plane[2] ^ 1;
   const int nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
   const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
-  const auto ix = V8::template lane<0>(inv4), iy = V8::template lane<1>(inv4), iz = V8::template lane<2>(inv4);
+  const auto ix = V8::template lane<0>(inv), iy = V8::template lane<1>(inv), iz = V8::template lane<2>(inv);
   const auto tmin = V8::set1(ray.tmin);
   const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
   // Far distances use the reciprocal times the exit padding, rounded once per ray:
@@ -352,8 +349,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   // oracle's fl(fl(d * inv) * pad), so the 2 gamma(3) margin still covers the rounding of
   // both ends (the padding was sized for the sub, reciprocal and product roundings), and
   // the node test loses a multiply from its longest dependency chain. ±inf stays ±inf.
-  const __m128 finv4 = _mm_mul_ps(inv4, _mm_set1_ps(pad1));
-  const auto fix = V8::template lane<0>(finv4), fiy = V8::template lane<1>(finv4), fiz = V8::template lane<2>(finv4);
+  const __m128 finv = _mm_mul_ps(inv, _mm_set1_ps(pad1));
+  const auto fix = V8::template lane<0>(finv), fiy = V8::template lane<1>(finv), fiz = V8::template lane<2>(finv);
   // With FMA and no zero direction component, a slab distance is one fused operation,
   // b inv - c, where c is org inv rounded outwards (up for near planes, down for far ones)
   // once per ray. Against (b - org) inv that moves near distances down and far ones up by a
@@ -370,8 +367,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
     const __m128 org = _mm_loadu_ps(ray.org), sign = _mm_set1_ps(-0.0f);
     // (Robust = false: c = p, no widening, as it has no padding.)
     const __m128 rel = _mm_set1_ps(Robust ? 0x1p-22f : 0.0f), tiny = _mm_set1_ps(Robust ? 0x1p-149f : 0.0f);
-    const __m128 pn = _mm_mul_ps(org, inv4);
-    const __m128 pf = _mm_mul_ps(org, finv4);
+    const __m128 pn = _mm_mul_ps(org, inv);
+    const __m128 pf = _mm_mul_ps(org, finv);
     const __m128 cn = _mm_add_ps(pn, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pn), rel), tiny));
     const __m128 cf = _mm_sub_ps(pf, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pf), rel), tiny));
     cnx = V8::template lane<0>(cn), cny = V8::template lane<1>(cn), cnz = V8::template lane<2>(cn);

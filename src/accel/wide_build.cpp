@@ -295,9 +295,10 @@ class WideLayout {
 
   // Fills `node` with the children's boxes and references: leaves get blocks from
   // next_block (relative to whatever base the caller adds later), interior child i (in slot
-  // order) the reference interior(first_inner + i). Adds the node's statistics.
+  // order) the reference interior(first_inner + i). Appends the leaf jobs, adds the node's
+  // statistics.
   void fill(const Kids& kids, std::size_t depth, std::size_t first_inner, std::size_t& next_block,
-            simd::WideNode<N>& node, std::vector<LeafJob>* leaves, LeafJob* leaf_out, WalkStats& stats) const {
+            simd::WideNode<N>& node, std::vector<LeafJob>& leaves, WalkStats& stats) const {
     namespace ref = simd::wide_ref;
     node = inert_node();
     std::size_t inner = 0;
@@ -316,11 +317,7 @@ class WideLayout {
       if (next_block + blocks > ref::kMaxBlocks) throw_too_many_blocks();
       node.child[k] = ref::kLeafBit | (static_cast<std::uint32_t>(blocks) << ref::kCountShift) |
                       static_cast<std::uint32_t>(next_block);
-      const LeafJob job{kids.id[k], static_cast<std::uint32_t>(next_block)};
-      if (leaves)
-        leaves->push_back(job);
-      else
-        *leaf_out++ = job;
+      leaves.push_back({kids.id[k], static_cast<std::uint32_t>(next_block)});
       next_block += blocks;
       const double area = kid.box.half_area();
       stats.leaf_area_tris += area * kid.count;
@@ -366,15 +363,11 @@ class WideLayout {
   void place(const TopNode& t, std::size_t w, std::size_t depth, std::size_t& next_node, std::size_t& next_block,
              std::size_t& next_leaf, simd::WideNode<N>* nodes, LeafJob* leaves, std::vector<Splice>& splices) {
     const std::size_t first_inner = next_node;
-    std::size_t leaf_count = 0;
-    for (int k = 0; k < t.kids.size; ++k) {
-      if (bvh_.nodes[t.kids.id[k]].is_leaf())
-        ++leaf_count;
-      else
-        ++next_node;
-    }
-    fill(t.kids, depth, first_inner, next_block, nodes[w], nullptr, leaves + next_leaf, stats_);
-    next_leaf += leaf_count;
+    for (int k = 0; k < t.kids.size; ++k) next_node += bvh_.nodes[t.kids.id[k]].is_leaf() ? 0 : 1;
+    std::vector<LeafJob> jobs;
+    fill(t.kids, depth, first_inner, next_block, nodes[w], jobs, stats_);
+    std::copy(jobs.begin(), jobs.end(), leaves + next_leaf);
+    next_leaf += jobs.size();
     std::size_t inner = 0;
     for (int k = 0; k < t.kids.size; ++k) {
       if (bvh_.nodes[t.kids.id[k]].is_leaf()) continue;
@@ -440,7 +433,7 @@ class WideLayout {
         queued[nqueued++] = {kids.id[k], static_cast<std::uint32_t>(w), p.depth + 1};
       }
       simd::WideNode<N> node;
-      fill(kids, p.depth, first_inner, tree.blocks, node, &tree.leaves, nullptr, tree.stats);
+      fill(kids, p.depth, first_inner, tree.blocks, node, tree.leaves, tree.stats);
       tree.nodes[p.wide] = node;
       for (int q = nqueued - 1; q >= 0; --q) stack.push_back(queued[q]);
     }

@@ -423,8 +423,8 @@ class SubtreeBuilder {
  public:
   SubtreeBuilder(const BvhBuildOptions& options, Item* items) : splitter_(options, items) {}
 
+  // Callers hold an ExactSubnormals (Builder::build_top).
   std::vector<BvhNode> build(Task root, const BBox& box) {
-    const ExactSubnormals exact;
     nodes_.reserve(2 * std::size_t{root.end - root.begin} - 1);
     nodes_.push_back({box, 0, 0});
     root.node = 0;
