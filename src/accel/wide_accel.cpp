@@ -31,7 +31,7 @@ class WideAccelFor final : public WideAccel {
   const simd::WideStats& stats() const override { return stats_; }
 
   void intersect(const Ray& ray, Hit& hit) const override {
-    Kernels::intersect(view(), simd::prepare_ray(ray, kShear), hit);
+    Kernels::intersect(view(), ray, hit);
   }
   bool occluded(const Ray& ray) const override { return Kernels::occluded(view(), simd::prepare_ray(ray, kShear)); }
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override {

@@ -2,7 +2,10 @@
 // "Watertight Ray/Triangle Intersection", JCGT 2(1)): triangles sharing an edge or a vertex
 // leave no crack between them for rays aimed exactly at the shared points.
 #pragma once
+#include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <type_traits>
 #include <utility>
@@ -53,24 +56,38 @@ struct WoopRay {
 };
 static_assert(sizeof(WoopRay<float>) == 24);
 
-/// Computes the shear constants of a ray direction (paper, section 3). Ties in |dir| pick the
-/// lowest axis. A zero, infinite or NaN direction gives constants (NaN, Inf, sz = 0) with
+/// The axes of make_woop_ray, tabulated. Entry c | n << 3 is for the comparisons
+/// c = (|d0| >= |d1|) | (|d0| >= |d2|) << 1 | (|d1| >= |d2|) << 2 and the signs
+/// n = (d0 < 0) | (d1 < 0) << 1 | (d2 < 0) << 2; it packs kx | ky << 2 | kz << 4. kz is
+/// where |d| is largest (ties: the lowest axis), kx and ky the next axes cyclically,
+/// swapped when looking down -z (which keeps the winding, so det's sign is the facing).
+/// A lookup, not branches: for incoherent rays each of those tests is a coin toss to the
+/// branch predictor (1.5 mispredictions per ray), and the single-ray walk
+/// (simd/wide_traverse.h) forms c and n with two vector compares.
+inline constexpr std::array<std::uint8_t, 64> kWoopAxes = [] {
+  std::array<std::uint8_t, 64> table{};
+  for (int i = 0; i < 64; ++i) {
+    const int c1 = i & 1, c2 = (i >> 1) & 1, c3 = (i >> 2) & 1;
+    // kz = |d0| >= |d1| ? (|d0| >= |d2| ? 0 : 2) : (|d1| >= |d2| ? 1 : 2)
+    const int kz = c1 ? (c2 ? 0 : 2) : (c3 ? 1 : 2);
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if ((i >> (3 + kz)) & 1) std::swap(kx, ky);
+    table[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(kx | ky << 2 | kz << 4);
+  }
+  return table;
+}();
+
+/// Computes the shear constants of a ray direction (paper, section 3), on the axes of
+/// kWoopAxes. A zero, infinite or NaN direction gives constants (NaN, Inf, sz = 0) with
 /// which every intersect_watertight misses. Pure function.
 template <class T>
 WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
-  const T ax = std::abs(dir.x), ay = std::abs(dir.y), az = std::abs(dir.z);
-  // kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2), kx and ky the next axes
-  // cyclically, swapped when looking down -z (which keeps the winding, so det's sign is
-  // the facing). In integer arithmetic, not branches: for incoherent rays each of these
-  // tests is a coin toss to the branch predictor, 1.5 mispredictions per ray.
-  const int c1 = ax >= ay, c2 = ax >= az, c3 = ay >= az;
-  const int kz = 2 - 2 * (c1 & c2) - ((1 - c1) & c3);
-  constexpr int kNext = 0b00'10'01;  // 2-bit fields: next(0) = 1, next(1) = 2, next(2) = 0
-  int kx = (kNext >> (2 * kz)) & 3;
-  int ky = (kNext >> (2 * kx)) & 3;
   const T d[3] = {dir.x, dir.y, dir.z};  // indexed loads (Vec3's operator[] branches on the index)
-  const int swap = (kx ^ ky) & -static_cast<int>(d[kz] < 0);
-  kx ^= swap, ky ^= swap;
+  const T ax = std::abs(d[0]), ay = std::abs(d[1]), az = std::abs(d[2]);
+  const int c = (ax >= ay) | (ax >= az) << 1 | (ay >= az) << 2;
+  const int n = (d[0] < 0) | (d[1] < 0) << 1 | (d[2] < 0) << 2;
+  const int e = kWoopAxes[static_cast<std::size_t>(c | n << 3)];
+  const int kx = e & 3, ky = (e >> 2) & 3, kz = e >> 4;
   return {kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], T(1) / d[kz]};
 }
 
