@@ -105,12 +105,9 @@ struct WideKernels {
 
   /// Closest hit of one ray: updates `hit` with every triangle hit at
   /// ray.tmin <= t < min(hit.t, ray.tmax) that is nearer (as RayBlockKernels::intersect).
-  /// The ray is prepared here: the watertight shear comes from the registers that hold its
-  /// reciprocal direction (as prepare_ray, whose call cost 4% of diffuse rays' time).
   static void intersect(const View& bvh, const Ray& ray, Hit& hit);
-  /// True when some triangle is hit with ray.tmin <= t < ray.tmax. `ray` must be prepared
-  /// for Test (prepare_ray with the watertight shear for watertight).
-  static bool occluded(const View& bvh, const PreparedRay& ray);
+  /// True when some triangle is hit with ray.tmin <= t < ray.tmax.
+  static bool occluded(const View& bvh, const Ray& ray);
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
@@ -129,6 +126,11 @@ struct WideKernels {
   /// component is ±0 (1) or some is (0), with the reciprocal direction in `inv` and the
   /// direction (lane 3: tmax) in `dir`.
   [[gnu::always_inline]] inline static int setup_single(const Ray& ray, __m128& inv, __m128& dir);
+  /// prepare_ray's work for the single-ray entries, done here: the watertight shear comes
+  /// from the registers that hold the reciprocal direction (the call to prepare_ray cost 4%
+  /// of diffuse rays' time). Returns setup_single's answer; `pr` is complete unless -1.
+  template <bool AnyHit>
+  [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   template <bool AnyHit, bool NoZero>
@@ -560,17 +562,18 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray& ray, Hit& hit) {
-  if (bvh.root == wide_ref::kEmptyRef) return;
-  PreparedRay pr;
-  pr.ray = ray;
-  __m128 inv, dir;
+template <bool AnyHit>
+int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
+  __m128 dir;
   const int no_zero = setup_single(ray, inv, dir);
-  if (no_zero < 0) return;
+  if (no_zero < 0) return no_zero;
+  pr.ray = ray;
+  pr.k[0] = pr.k[1] = pr.k[2] = 0;
+  pr.s[0] = pr.s[1] = pr.s[2] = pr.sure[0] = pr.sure[1] = 0.0f;
   if constexpr (Test == TriangleTest::watertight) {
-    // prepare_ray's shear (core::make_woop_ray), bit for bit: the same axes, and the same
-    // quotients, each one IEEE division: d / d[kz] in one divps, and 1 / d[kz] is inv's lane.
-    // The axes: core::kWoopAxes at the comparisons of |d| and the signs of d, two compares.
+    // core::make_woop_ray, bit for bit. The axes: core::kWoopAxes at the comparisons of |d|
+    // and the signs of d, two compares. The quotients, each one IEEE division: d / d[kz] in
+    // one divps, and 1 / d[kz] is inv's lane kz.
     const __m128 a = _mm_andnot_ps(_mm_set1_ps(-0.0f), dir);
     const int c = _mm_movemask_ps(_mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),
                                                _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)))) & 7;
@@ -582,18 +585,35 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray& ray,
     _mm_store_ps(r, inv);
     pr.k[0] = kx, pr.k[1] = ky, pr.k[2] = kz;
     pr.s[0] = q[kx], pr.s[1] = q[ky], pr.s[2] = r[kz];
+    if constexpr (AnyHit) {
+      const auto [lo, hi] = core::sure_quotient_range(ray.tmin, ray.tmax);
+      pr.sure[0] = lo, pr.sure[1] = hi;
+    }
   }
-  pr.sure[0] = pr.sure[1] = 0.0f;  // (any hit only)
-  if (no_zero)
+  return no_zero;
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray& ray, Hit& hit) {
+  if (bvh.root == wide_ref::kEmptyRef) return;
+  PreparedRay pr;
+  __m128 inv;
+  const int no_zero = prepare_single<false>(ray, pr, inv);
+  if (no_zero > 0)
     walk<false, true>(bvh, pr, inv, bvh.root, hit);
-  else
+  else if (no_zero == 0)
     walk<false, false>(bvh, pr, inv, bvh.root, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-bool WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const PreparedRay& ray) {
+bool WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray& ray) {
+  if (bvh.root == wide_ref::kEmptyRef) return false;
+  PreparedRay pr;
+  __m128 inv;
+  const int no_zero = prepare_single<true>(ray, pr, inv);
   Hit unused;
-  return trace_single<true>(bvh, ray, bvh.root, unused);
+  if (no_zero > 0) return walk<true, true>(bvh, pr, inv, bvh.root, unused);
+  return no_zero == 0 && walk<true, false>(bvh, pr, inv, bvh.root, unused);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -9,7 +9,6 @@
 #include "accel/wide_build.h"
 #include "simd/aligned.h"
 #include "simd/dispatch.h"
-#include "simd/prepared_ray.h"
 #include "simd/wide_traverse.h"
 
 namespace volley::accel {
@@ -21,7 +20,6 @@ class WideAccelFor final : public WideAccel {
   using Kernels = simd::WideKernels<Arch, Test, Robust>;
   using Block = typename Kernels::Block;
   static constexpr int W = Kernels::W;
-  static constexpr bool kShear = Test == TriangleTest::watertight;
 
   int block_width() const override { return W; }
 
@@ -33,7 +31,7 @@ class WideAccelFor final : public WideAccel {
   void intersect(const Ray& ray, Hit& hit) const override {
     Kernels::intersect(view(), ray, hit);
   }
-  bool occluded(const Ray& ray) const override { return Kernels::occluded(view(), simd::prepare_ray(ray, kShear)); }
+  bool occluded(const Ray& ray) const override { return Kernels::occluded(view(), ray); }
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override {
     Kernels::intersect(view(), rays, hits);
   }

@@ -25,8 +25,10 @@ inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
 /// fl(hi |det|) and the edge and det tests pass: the division-free any-hit decision of the
 /// SIMD kernels (simd/watertight.h, sure_hit; the reasons are given there). Lanes outside
 /// (within ~16 ulps of either end, or not hit) are left to the quotient test.
+/// Always inlined: the single-ray walk (simd/wide_traverse.h) calls it from the per-ISA
+/// files, which must not emit a copy of their own.
 template <class T>
-constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
+[[gnu::always_inline]] constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
   constexpr T kEps = std::numeric_limits<T>::epsilon(), kMin = std::numeric_limits<T>::min();
   constexpr T kInf = std::numeric_limits<T>::infinity();
   const T lo = tmin > 0 ? (tmin < kMin ? kMin : tmin) * (1 + 8 * kEps) : tmin <= 0 ? T(0) : kInf;
