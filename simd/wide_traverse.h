@@ -133,8 +133,11 @@ struct WideKernels {
   [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
+  /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
+  /// of single rays (Sponza and kitchen diffuse +1%, kitchen primary +2.5%).
   template <bool AnyHit, bool NoZero>
-  static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv, std::uint32_t start, Hit& hit);
+  [[gnu::always_inline]] inline static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv,
+                                                 std::uint32_t start, Hit& hit);
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
