@@ -118,7 +118,7 @@ struct WideKernels {
 
   /// Single-ray traversal of the subtree `start` (the packet traversal's fallback).
   template <bool AnyHit>
-  static bool trace_single(const View& bvh, const PreparedRay& ray, std::uint32_t start, Hit& hit);
+  static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
 
  private:
   /// The start of every single-ray trace: -1 for a ray the oracle rejects (a non-finite
@@ -131,6 +131,11 @@ struct WideKernels {
   /// of diffuse rays' time). Returns setup_single's answer; `pr` is complete unless -1.
   template <bool AnyHit>
   [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
+  /// Single-ray traversal of the subtree `start`, prepared here: intersect, occluded and
+  /// trace_single.
+  template <bool AnyHit>
+  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start,
+                                                      Hit& hit);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
@@ -315,13 +320,19 @@ inline constexpr int kWideStack = (kWideN - 1) * core::kBvhMaxDepth + 1;
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit>
-bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const PreparedRay& pr, std::uint32_t start,
-                                                   Hit& hit) {
+bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit) {
+  return trace_ray<AnyHit>(bvh, ray, start, hit);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit>
+bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit) {
   if (start == wide_ref::kEmptyRef) return false;
-  __m128 inv, dir;
-  const int no_zero = setup_single(pr.ray, inv, dir);
-  if (no_zero < 0) return false;
-  return no_zero ? walk<AnyHit, true>(bvh, pr, inv, start, hit) : walk<AnyHit, false>(bvh, pr, inv, start, hit);
+  PreparedRay pr;
+  __m128 inv;
+  const int no_zero = prepare_single<AnyHit>(ray, pr, inv);
+  if (no_zero > 0) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
+  return no_zero == 0 && walk<AnyHit, false>(bvh, pr, inv, start, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -598,25 +609,13 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray& ray, Hit& hit) {
-  if (bvh.root == wide_ref::kEmptyRef) return;
-  PreparedRay pr;
-  __m128 inv;
-  const int no_zero = prepare_single<false>(ray, pr, inv);
-  if (no_zero > 0)
-    walk<false, true>(bvh, pr, inv, bvh.root, hit);
-  else if (no_zero == 0)
-    walk<false, false>(bvh, pr, inv, bvh.root, hit);
+  trace_ray<false>(bvh, ray, bvh.root, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 bool WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray& ray) {
-  if (bvh.root == wide_ref::kEmptyRef) return false;
-  PreparedRay pr;
-  __m128 inv;
-  const int no_zero = prepare_single<true>(ray, pr, inv);
   Hit unused;
-  if (no_zero > 0) return walk<true, true>(bvh, pr, inv, bvh.root, unused);
-  return no_zero == 0 && walk<true, false>(bvh, pr, inv, bvh.root, unused);
+  return trace_ray<true>(bvh, ray, bvh.root, unused);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -993,16 +992,15 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
         const int i = std::countr_zero(b);
         const Ray r{{rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]},
                     rays.tmax[i]};
-        const PreparedRay pr = prepare_ray(r, Test == TriangleTest::watertight);
         if constexpr (AnyHit) {
           Hit unused;
-          if (trace_single<true>(bvh, pr, cur, unused)) {
+          if (trace_single<true>(bvh, r, cur, unused)) {
             occluded |= 1u << i;
             far_lanes[i] = -std::numeric_limits<float>::infinity();
           }
         } else {
           Hit h{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
-          if (trace_single<false>(bvh, pr, cur, h)) {
+          if (trace_single<false>(bvh, r, cur, h)) {
             hits.t[i] = h.t, hits.u[i] = h.u, hits.v[i] = h.v, hits.prim[i] = h.prim;
             far_lanes[i] = h.t;
           }
