@@ -105,9 +105,11 @@ struct WideKernels {
 
   /// Closest hit of one ray: updates `hit` with every triangle hit at
   /// ray.tmin <= t < min(hit.t, ray.tmax) that is nearer (as RayBlockKernels::intersect).
-  static void intersect(const View& bvh, const Ray& ray, Hit& hit);
-  /// True when some triangle is hit with ray.tmin <= t < ray.tmax.
-  static bool occluded(const View& bvh, const Ray& ray);
+  /// `bvh` is a const View*, type-erased so that the facade (accel::WideAccel) calls this
+  /// through a plain function pointer: one call per ray.
+  static void intersect_erased(const void* bvh, const Ray& ray, Hit& hit);
+  /// True when some triangle is hit with ray.tmin <= t < ray.tmax (`bvh` as above).
+  static bool occluded_erased(const void* bvh, const Ray& ray);
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
@@ -131,8 +133,8 @@ struct WideKernels {
   /// of diffuse rays' time). Returns setup_single's answer; `pr` is complete unless -1.
   template <bool AnyHit>
   [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
-  /// Single-ray traversal of the subtree `start`, prepared here: intersect, occluded and
-  /// trace_single.
+  /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
+  /// occluded_erased and trace_single.
   template <bool AnyHit>
   [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start,
                                                       Hit& hit);
@@ -608,14 +610,16 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray& ray, Hit& hit) {
-  trace_ray<false>(bvh, ray, bvh.root, hit);
+void WideKernels<Arch, Test, Robust>::intersect_erased(const void* bvh, const Ray& ray, Hit& hit) {
+  const View& view = *static_cast<const View*>(bvh);
+  trace_ray<false>(view, ray, view.root, hit);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-bool WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray& ray) {
+bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray& ray) {
+  const View& view = *static_cast<const View*>(bvh);
   Hit unused;
-  return trace_ray<true>(bvh, ray, bvh.root, unused);
+  return trace_ray<true>(view, ray, view.root, unused);
 }
 
 // ---------------------------------------------------------------------------------------

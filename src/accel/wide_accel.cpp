@@ -21,25 +21,25 @@ class WideAccelFor final : public WideAccel {
   using Block = typename Kernels::Block;
   static constexpr int W = Kernels::W;
 
+  WideAccelFor() : WideAccel({&Kernels::intersect_erased, &Kernels::occluded_erased, &view_}) {}
+  WideAccelFor(const WideAccelFor&) = delete;  // single_ points at view_
+  WideAccelFor& operator=(const WideAccelFor&) = delete;
+
   int block_width() const override { return W; }
 
   void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) override {
     stats_ = build_wide<Test, W>(bvh, xyz, ids, nodes_, blocks_, root_);
+    view_ = {nodes_.data(), blocks_.data(), root_};
   }
   const simd::WideStats& stats() const override { return stats_; }
 
-  void intersect(const Ray& ray, Hit& hit) const override {
-    Kernels::intersect(view(), ray, hit);
-  }
-  bool occluded(const Ray& ray) const override { return Kernels::occluded(view(), ray); }
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override {
-    Kernels::intersect(view(), rays, hits);
+    Kernels::intersect(view_, rays, hits);
   }
-  std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view(), rays); }
+  std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view_, rays); }
 
  private:
-  typename Kernels::View view() const { return {nodes_.data(), blocks_.data(), root_}; }
-
+  typename Kernels::View view_{nullptr, nullptr, simd::wide_ref::kEmptyRef};
   simd::AlignedVector<simd::WideNode<simd::kWideN>> nodes_;
   simd::AlignedVector<Block> blocks_;
   std::uint32_t root_ = simd::wide_ref::kEmptyRef;
