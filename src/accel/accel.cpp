@@ -81,11 +81,17 @@ void Accel::commit(const Options& options) {
 
 Hit Accel::intersect(const Ray& ray) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  if (const accel::WideAccel* w = impl_->wide_only) {
+    Hit hit;
+    w->intersect(ray, hit);
+    return hit;
+  }
   return impl_->intersect(ray);
 }
 
 bool Accel::occluded(const Ray& ray) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  if (const accel::WideAccel* w = impl_->wide_only) return w->occluded(ray);
   return impl_->occluded(ray);
 }
 

@@ -109,6 +109,7 @@ void Accel::Impl::build() {
   degenerate = static_cast<std::size_t>(std::count(is_degenerate.begin(), is_degenerate.end(), 1));
 
   wide.reset();
+  wide_only = nullptr;
   plane_triangles.clear();
   plane_triangles_double.clear();
   if (isa != Isa::scalar) {
@@ -146,6 +147,7 @@ void Accel::Impl::build() {
     poly_boxes.push_back(b);
   }
   polygon_bvh = polygons.empty() ? core::Bvh{} : core::build_bvh(poly_boxes, core::BvhBuildOptions{});
+  wide_only = wide && polygon_bvh.nodes.empty() ? wide.get() : nullptr;
 }
 
 template <bool AnyHit, bool Robust>

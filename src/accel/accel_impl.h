@@ -44,6 +44,9 @@ struct Accel::Impl {
   std::vector<core::PlaneTriangle<double>> plane_triangles_double;
   /// SIMD path (isa != scalar): the wide BVH over triangle blocks.
   std::unique_ptr<accel::WideAccel> wide;
+  /// `wide` when it holds the whole scene (no polygons), else null: Accel's single-ray
+  /// queries call it directly (one call per ray less).
+  const accel::WideAccel* wide_only = nullptr;
 
   void build();
   Hit intersect(const Ray& ray) const;
