@@ -28,44 +28,46 @@ constexpr long kIters = 4096;        // loop trips per benchmark iteration
 
 /// The vector type and operations of one width, as target-attributed functions (baseline
 /// file: no per-ISA object, nothing inlined across widths).
-#define VOLLEY_PORTS(NAME, TARGET, V, M, SET1, FMA, ADD, AND, CMP)                                           \
-  struct NAME {                                                                                               \
-    [[gnu::target(TARGET), gnu::noinline]] static float chain(long n) {                                       \
-      V a = SET1(0.5f);                                                                                        \
-      const V b = SET1(0.999f);                                                                                \
-      for (long i = 0; i < n; ++i) {                                                                           \
-        a = FMA(a, b, b);                                                                                      \
-        asm volatile("" : "+v"(a));                                                                            \
-      }                                                                                                        \
-      alignas(64) float out[sizeof(V) / 4];                                                                    \
-      __builtin_memcpy(out, &a, sizeof(V));                                                                    \
-      return out[0];                                                                                           \
-    }                                                                                                          \
-    /* Op: 0 fma, 1 add, 2 and, 3 compare, 4 fma + compare (half each) */                                      \
-    template <int Op>                                                                                          \
-    [[gnu::target(TARGET), gnu::noinline]] static unsigned run(long n) {                                      \
-      V x[kChains];                                                                                            \
-      _Pragma("GCC unroll 12") for (int c = 0; c < kChains; ++c) x[c] = SET1(0.5f + 0.01f * c);               \
-      const V y = SET1(0.25f), z = SET1(0.75f);                                                                \
-      M m[kMasks];                                                                                             \
-      for (int k = 0; k < kMasks; ++k) m[k] = all_lanes(M{});                                                  \
-      for (long i = 0; i < n; ++i) {                                                                           \
-        _Pragma("GCC unroll 12") for (int c = 0; c < kChains; ++c) {                                           \
-          if constexpr (Op == 0) x[c] = FMA(x[c], y, z);                                                       \
-          if constexpr (Op == 1) x[c] = ADD(x[c], y);                                                          \
-          if constexpr (Op == 2) x[c] = AND(x[c], z);                                                          \
-          if constexpr (Op == 3) CMP(m[c % kMasks], x[c], y);                                                  \
-          if constexpr (Op == 4) {                                                                             \
-            if (c & 1) CMP(m[c % kMasks], x[c], y);                                                            \
-            else x[c] = FMA(x[c], y, z);                                                                       \
-          }                                                                                                    \
-          asm volatile("" : "+v"(x[c]));                                                                       \
-        }                                                                                                      \
-      }                                                                                                        \
-      unsigned acc = 0;                                                                                        \
-      for (int k = 0; k < kMasks; ++k) acc += mask_bits(m[k]);                                                 \
-      return acc;                                                                                              \
-    }                                                                                                          \
+#define VOLLEY_PORTS(NAME, TARGET, V, M, SET1, FMA, ADD, AND, CMP)                              \
+  struct NAME {                                                                                 \
+    [[gnu::target(TARGET), gnu::noinline]] static float chain(long n) {                         \
+      V a = SET1(0.5f);                                                                         \
+      const V b = SET1(0.999f);                                                                 \
+      for (long i = 0; i < n; ++i) {                                                            \
+        a = FMA(a, b, b);                                                                       \
+        asm volatile("" : "+v"(a));                                                             \
+      }                                                                                         \
+      alignas(64) float out[sizeof(V) / 4];                                                     \
+      __builtin_memcpy(out, &a, sizeof(V));                                                     \
+      return out[0];                                                                            \
+    }                                                                                           \
+    /* Op: 0 fma, 1 add, 2 and, 3 compare, 4 fma + compare (half each) */                       \
+    template <int Op>                                                                           \
+    [[gnu::target(TARGET), gnu::noinline]] static unsigned run(long n) {                        \
+      V x[kChains];                                                                             \
+      _Pragma("GCC unroll 12") for (int c = 0; c < kChains; ++c) x[c] = SET1(0.5f + 0.01f * c); \
+      const V y = SET1(0.25f), z = SET1(0.75f);                                                 \
+      M m[kMasks];                                                                              \
+      for (int k = 0; k < kMasks; ++k) m[k] = all_lanes(M{});                                   \
+      for (long i = 0; i < n; ++i) {                                                            \
+        _Pragma("GCC unroll 12") for (int c = 0; c < kChains; ++c) {                            \
+          if constexpr (Op == 0) x[c] = FMA(x[c], y, z);                                        \
+          if constexpr (Op == 1) x[c] = ADD(x[c], y);                                           \
+          if constexpr (Op == 2) x[c] = AND(x[c], z);                                           \
+          if constexpr (Op == 3) CMP(m[c % kMasks], x[c], y);                                   \
+          if constexpr (Op == 4) {                                                              \
+            if (c & 1)                                                                          \
+              CMP(m[c % kMasks], x[c], y);                                                      \
+            else                                                                                \
+              x[c] = FMA(x[c], y, z);                                                           \
+          }                                                                                     \
+          asm volatile("" : "+v"(x[c]));                                                        \
+        }                                                                                       \
+      }                                                                                         \
+      unsigned acc = 0;                                                                         \
+      for (int k = 0; k < kMasks; ++k) acc += mask_bits(m[k]);                                  \
+      return acc;                                                                               \
+    }                                                                                           \
   };
 
 // Compares as the kernels chain them: AVX-512 into a mask register under the previous mask
@@ -78,8 +80,8 @@ constexpr int kMasks = 6;
 [[gnu::target("avx2")]] inline unsigned mask_bits(__m256 m) { return static_cast<unsigned>(_mm256_movemask_ps(m)); }
 #define VOLLEY_CMP512(m, a, b) (m) = _mm512_mask_cmp_ps_mask(m, a, b, _CMP_LT_OQ)
 #define VOLLEY_CMP256(m, a, b) (m) = _mm256_and_ps(m, _mm256_cmp_ps(a, b, _CMP_LT_OQ))
-VOLLEY_PORTS(Zmm, "avx512f,avx512dq", __m512, __mmask16, _mm512_set1_ps, _mm512_fmadd_ps, _mm512_add_ps,
-             _mm512_and_ps, VOLLEY_CMP512)
+VOLLEY_PORTS(Zmm, "avx512f,avx512dq", __m512, __mmask16, _mm512_set1_ps, _mm512_fmadd_ps, _mm512_add_ps, _mm512_and_ps,
+             VOLLEY_CMP512)
 VOLLEY_PORTS(Ymm, "avx2,fma", __m256, __m256, _mm256_set1_ps, _mm256_fmadd_ps, _mm256_add_ps, _mm256_and_ps,
              VOLLEY_CMP256)
 
@@ -119,8 +121,10 @@ const char* const kOps[] = {"fma", "add", "and", "compare", "fma+compare"};
 template <class P>
 void register_width(const std::string& width) {
   const auto add = [&](int op, void (*fn)(benchmark::State&)) {
-    benchmark::RegisterBenchmark(("machine/ports/" + width + "/" + kOps[op]).c_str(),
-                                 [=](benchmark::State& s) { fn(s); s.SetLabel(width); });
+    benchmark::RegisterBenchmark(("machine/ports/" + width + "/" + kOps[op]).c_str(), [=](benchmark::State& s) {
+      fn(s);
+      s.SetLabel(width);
+    });
   };
   add(0, issue<P, 0>), add(1, issue<P, 1>), add(2, issue<P, 2>), add(3, issue<P, 3>), add(4, issue<P, 4>);
 }

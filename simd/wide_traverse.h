@@ -29,7 +29,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-
 #include <xsimd/xsimd.hpp>
 
 #include "core/bvh.h"
@@ -136,8 +135,7 @@ struct WideKernels {
   /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
   /// occluded_erased and trace_single.
   template <bool AnyHit>
-  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start,
-                                                      Hit& hit);
+  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
@@ -592,7 +590,8 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
     // one divps, and 1 / d[kz] is inv's lane kz.
     const __m128 a = _mm_andnot_ps(_mm_set1_ps(-0.0f), dir);
     const int c = _mm_movemask_ps(_mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),
-                                               _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)))) & 7;
+                                               _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)))) &
+                  7;
     const int n = _mm_movemask_ps(_mm_cmplt_ps(dir, _mm_setzero_ps())) & 7;
     const int e = core::kWoopAxes[static_cast<std::size_t>(c | n << 3)];
     const int kx = e & 3, ky = (e >> 2) & 3, kz = e >> 4;
@@ -994,8 +993,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
       for (int c = 0; c < C; ++c) tfar[c].store_aligned(far_lanes + c * L);
       for (std::uint32_t b = bits; b != 0; b &= b - 1) {
         const int i = std::countr_zero(b);
-        const Ray r{{rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]},
-                    rays.tmax[i]};
+        const Ray r{
+            {rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmax[i]};
         if constexpr (AnyHit) {
           Hit unused;
           if (trace_single<true>(bvh, r, cur, unused)) {

@@ -61,10 +61,10 @@ TEST_CASE("wide: directions with tied magnitudes and signed zeros pick the oracl
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> pos(-8.0f, 8.0f);
   const float z = -0.0f;
-  const glm::vec3 dirs[] = {{1, 1, 1},  {-1, 1, 1},  {1, -1, 1}, {1, 1, -1},  {-1, -1, -1}, {1, 1, 0},
-                            {1, 1, z},  {-1, 1, z},  {z, 1, -1}, {z, -1, 1},  {1, z, -1},   {-1, z, 1},
-                            {2, 2, 1},  {2, -1, -2}, {-1, 2, 2}, {z, z, -1},  {z, 1, z},    {-1, z, z},
-                            {3, -3, 3}, {0.5f, -0.5f, 0.25f}};
+  const glm::vec3 dirs[] = {{1, 1, 1},  {-1, 1, 1}, {1, -1, 1}, {1, 1, -1},  {-1, -1, -1},
+                            {1, 1, 0},  {1, 1, z},  {-1, 1, z}, {z, 1, -1},  {z, -1, 1},
+                            {1, z, -1}, {-1, z, 1}, {2, 2, 1},  {2, -1, -2}, {-1, 2, 2},
+                            {z, z, -1}, {z, 1, z},  {-1, z, z}, {3, -3, 3},  {0.5f, -0.5f, 0.25f}};
   for (const glm::vec3& d : dirs)
     for (int i = 0; i < 24; ++i) {
       const glm::vec3 target(pos(rng), pos(rng), pos(rng));
