@@ -122,14 +122,12 @@ struct WideKernels {
   static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
 
  private:
-  /// The start of every single-ray trace: -1 for a ray the oracle rejects (a non-finite
-  /// origin or direction component, a NaN interval end), else whether no direction
-  /// component is ±0 (1) or some is (0), with the reciprocal direction in `inv` and the
-  /// direction (lane 3: tmax) in `dir`.
-  [[gnu::always_inline]] inline static int setup_single(const Ray& ray, __m128& inv, __m128& dir);
-  /// prepare_ray's work for the single-ray entries, done here: the watertight shear comes
-  /// from the registers that hold the reciprocal direction (the call to prepare_ray cost 4%
-  /// of diffuse rays' time). Returns setup_single's answer; `pr` is complete unless -1.
+  /// The start of every single-ray trace, prepare_ray's work done here: the watertight
+  /// shear comes from the registers that hold the reciprocal direction (the call to
+  /// prepare_ray cost 4% of diffuse rays' time). Returns -1 for a ray the oracle rejects (a
+  /// non-finite origin or direction component, a NaN interval end), else whether no
+  /// direction component is ±0 (1) or some is (0), with `pr` complete and the reciprocal
+  /// direction in `inv`.
   template <bool AnyHit>
   [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
   /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
@@ -335,26 +333,6 @@ bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray,
   return no_zero == 0 && walk<AnyHit, false>(bvh, pr, inv, start, hit);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-int WideKernels<Arch, Test, Robust>::setup_single(const Ray& ray, __m128& inv, __m128& dir) {
-  // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
-  // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
-  // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
-  static_assert(offsetof(Ray, tmin) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tmax) == 28);
-  const float* const f = reinterpret_cast<const float*>(&ray);  // org, tmin, dir, tmax
-  const __m128 org_tmin = _mm_loadu_ps(f), dir_tmax = _mm_loadu_ps(f + 4);
-  const __m128 zero = _mm_setzero_ps();
-  const __m128 ok_o = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero),
-                                   _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
-  const __m128 ok_d = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(dir_tmax, dir_tmax), zero),
-                                   _mm_cmpord_ps(dir_tmax, dir_tmax), 0b1000);
-  if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return -1;
-  // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
-  // for the three; lane 3 is 1 / tmax, unused).
-  inv = _mm_div_ps(_mm_set1_ps(1.0f), dir_tmax);
-  dir = dir_tmax;
-  return (_mm_movemask_ps(_mm_cmpeq_ps(dir_tmax, zero)) & 0x7) == 0;
-}
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool NoZero>
@@ -578,21 +556,34 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit>
 int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
-  __m128 dir;
-  const int no_zero = setup_single(ray, inv, dir);
-  if (no_zero < 0) return no_zero;
+  // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
+  // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
+  // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
+  static_assert(offsetof(Ray, tmin) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tmax) == 28);
+  const float* const f = reinterpret_cast<const float*>(&ray);  // org, tmin, dir, tmax
+  const __m128 org_tmin = _mm_loadu_ps(f), dir = _mm_loadu_ps(f + 4);
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 ok_o = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero),
+                                   _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
+  const __m128 ok_d = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(dir, dir), zero), _mm_cmpord_ps(dir, dir), 0b1000);
+  if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return -1;
+  // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
+  // for the three; lane 3 is 1 / tmax, unused).
+  inv = _mm_div_ps(_mm_set1_ps(1.0f), dir);
+  const int no_zero = (_mm_movemask_ps(_mm_cmpeq_ps(dir, zero)) & 0x7) == 0;
   pr.ray = ray;
-  pr.k[0] = pr.k[1] = pr.k[2] = 0;
-  pr.s[0] = pr.s[1] = pr.s[2] = pr.sure[0] = pr.sure[1] = 0.0f;
-  if constexpr (Test == TriangleTest::watertight) {
+  if constexpr (Test != TriangleTest::watertight) {
+    pr.k[0] = pr.k[1] = pr.k[2] = 0;  // (moller and plane need nothing more)
+    pr.s[0] = pr.s[1] = pr.s[2] = pr.sure[0] = pr.sure[1] = 0.0f;
+  } else {
     // core::make_woop_ray, bit for bit. The axes: core::kWoopAxes at the comparisons of |d|
     // and the signs of d, two compares. The quotients, each one IEEE division: d / d[kz] in
     // one divps, and 1 / d[kz] is inv's lane kz.
     const __m128 a = _mm_andnot_ps(_mm_set1_ps(-0.0f), dir);
-    const int c = _mm_movemask_ps(_mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),
-                                               _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)))) &
-                  7;
-    const int n = _mm_movemask_ps(_mm_cmplt_ps(dir, _mm_setzero_ps())) & 7;
+    const __m128 ge = _mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),  // |d0| |d0| |d1|
+                                   _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)));  // |d1| |d2| |d2|
+    const int c = _mm_movemask_ps(ge) & 7;
+    const int n = _mm_movemask_ps(_mm_cmplt_ps(dir, zero)) & 7;
     const int e = core::kWoopAxes[static_cast<std::size_t>(c | n << 3)];
     const int kx = e & 3, ky = (e >> 2) & 3, kz = e >> 4;
     alignas(16) float q[4], r[4];
@@ -600,10 +591,8 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
     _mm_store_ps(r, inv);
     pr.k[0] = kx, pr.k[1] = ky, pr.k[2] = kz;
     pr.s[0] = q[kx], pr.s[1] = q[ky], pr.s[2] = r[kz];
-    if constexpr (AnyHit) {
-      const auto [lo, hi] = core::sure_quotient_range(ray.tmin, ray.tmax);
-      pr.sure[0] = lo, pr.sure[1] = hi;
-    }
+    const auto [lo, hi] = AnyHit ? core::sure_quotient_range(ray.tmin, ray.tmax) : std::pair{0.0f, 0.0f};
+    pr.sure[0] = lo, pr.sure[1] = hi;  // (any hit only)
   }
   return no_zero;
 }

@@ -231,11 +231,11 @@ bool Accel::Impl::trace_polygons_as(const core::RayT<float>& r, Hit& hit) const 
 template <bool AnyHit>
 bool Accel::Impl::trace(const Ray& ray, Hit& hit) const {
   // Triangles only on the wide BVH (the common case): straight to its kernels.
-  if (wide && polygon_bvh.nodes.empty()) {
+  if (wide_only) {
     if constexpr (AnyHit) {
-      return wide->occluded(ray);
+      return wide_only->occluded(ray);
     } else {
-      wide->intersect(ray, hit);
+      wide_only->intersect(ray, hit);
       return hit.hit();
     }
   }

@@ -650,7 +650,7 @@ TEST_CASE("triangle: watertight leaks no ray aimed at shared vertices and edges 
 }  // namespace
 
 TEST_CASE("triangle: make_woop_ray picks the axes of its branching definition for every special direction") {
-  // The axis choice is integer arithmetic (no branches); this is the definition it encodes:
+  // The axis choice is a lookup (core::kWoopAxes, no branches); this is the definition it encodes:
   // kz the largest |component| (first of ties by the comparisons below), kx, ky the next
   // axes cyclically, swapped when dir[kz] < 0. NaN compares false everywhere.
   auto expected = [](const Vec3f& dir) {
