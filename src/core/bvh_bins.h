@@ -118,8 +118,8 @@ class ExactSubnormals {
 // integer bits, in lane 3 of hi. Items' hi has 0 in lane 3, and maxps keeps a positive
 // subnormal pattern against +0 (with DAZ clear: ExactSubnormals), so the count survives the
 // bound update and one integer add bumps it: no separate counter to load, increment and
-// store per axis. Exact while a
-// count stays below 2^23 (a subnormal pattern): add() sees at most bvh_build.cpp's kParallelBinning items.
+// store per axis. Exact while a count stays below 2^23 (a subnormal pattern): add() sees at
+// most bvh_build.cpp's kParallelBinning items.
 inline Box4 empty_bin() {
   Box4 b;
   b.hi = _mm_and_ps(b.hi, xyz_mask());  // count 0
