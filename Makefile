@@ -9,16 +9,26 @@ JOBS   ?= $(shell nproc)
 DEPS     := cmake g++ make pkg-config libxsimd-dev libbenchmark-dev libglm-dev libstb-dev \
             doctest-dev libtinyobjloader-dev nlohmann-json3-dev libtbb-dev libcli11-dev
 OPTIONAL := libembree-dev gnuplot-nox valgrind python3
+# The sanitizer builds and the fuzzers use clang with its runtimes and libFuzzer.
+SANITIZER_DEPS := clang libclang-rt-14-dev libfuzzer-14-dev
 SUDO     := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps build test demo bench perf perf-icount perf-plot clean
+.PHONY: deps deps-sanitizers build test test-asan test-tsan fuzz demo bench perf perf-icount perf-plot clean
 
-deps:
-	@missing=$$(for p in $(DEPS) $(OPTIONAL); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
+# Installs the Debian packages of $(1) that are missing.
+define install_missing
+	@missing=$$(for p in $(1); do dpkg -s $$p >/dev/null 2>&1 || echo $$p; done); \
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:" $$missing; \
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing; \
 	fi
+endef
+
+deps:
+	$(call install_missing,$(DEPS) $(OPTIONAL))
+
+deps-sanitizers: deps
+	$(call install_missing,$(SANITIZER_DEPS))
 
 build: deps
 	cmake --preset $(PRESET)
@@ -26,6 +36,21 @@ build: deps
 
 test: build
 	ctest --preset $(PRESET) -j $(JOBS)
+
+# The whole ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer (build/asan)
+# or ThreadSanitizer (build/tsan), clang -O1. README "Testing".
+test-asan test-tsan: test-%: deps-sanitizers
+	cmake --preset $*
+	cmake --build --preset $* -j $(JOBS)
+	ctest --preset $* -j $(JOBS)
+
+# Each libFuzzer target for FUZZ_SECONDS seconds from its committed seed corpus
+# (README "Testing"); a crash leaves its input in build/fuzz/artifacts/ and fails.
+FUZZ_SECONDS ?= 60
+fuzz: deps-sanitizers
+	cmake --preset fuzz
+	cmake --build --preset fuzz -j $(JOBS)
+	fuzz/run_all.sh build/fuzz $(FUZZ_SECONDS)
 
 demo: build
 	$(BUILD)/volley render scenes/cornell.json -o out/cornell.png

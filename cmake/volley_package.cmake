@@ -61,8 +61,9 @@ set(VOLLEY_PUBLIC_INCLUDE $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src> $<INSTALL
 add_library(volley_shared SHARED ${VOLLEY_PACKAGE_OBJECTS})
 target_link_libraries(volley_shared PRIVATE TBB::tbb)
 target_include_directories(volley_shared INTERFACE ${VOLLEY_PUBLIC_INCLUDE})
+# (A sanitizer build leaves the runtime's symbols to the executable that loads it.)
 target_link_options(volley_shared PRIVATE
-  -Wl,--no-undefined
+  $<$<STREQUAL:${VOLLEY_SANITIZE},>:-Wl,--no-undefined>
   -Wl,-Bsymbolic-functions
   -Wl,--version-script=${PROJECT_SOURCE_DIR}/cmake/volley.map)
 set_target_properties(volley_shared PROPERTIES
@@ -141,4 +142,9 @@ if(VOLLEY_BUILD_TESTS)
              -P ${PROJECT_SOURCE_DIR}/tests/consumer/run_consumer_test.cmake)
   set_tests_properties("package: install, find_package(volley), build and run tests/consumer" PROPERTIES
     TIMEOUT 600 PROCESSORS 2)
+  if(VOLLEY_SANITIZE)
+    # The consumer links the instrumented library: it builds with the same compiler and flags.
+    set_property(TEST "package: install, find_package(volley), build and run tests/consumer" APPEND PROPERTY
+      ENVIRONMENT "CC=clang;CXX=clang++;CFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING};CXXFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING};LDFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING}")
+  endif()
 endif()

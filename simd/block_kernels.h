@@ -62,11 +62,19 @@ concept DetScaled = requires(const Cand& c) {
 template <class T>
 concept QuotientDecides = T::kQuotientDecides;
 
+/// Tests whose hits are checked on the quotient t as well: T::confirm(r, c, t, upper) gives
+/// the valid lanes with tmin <= t < upper (Möller: on top of its scaled decision;
+/// watertight: the decision itself).
+template <class T>
+concept QuotientChecked = requires(const typename T::Rays& r, const typename T::Cand& c) {
+  T::confirm(r, c, c.t, c.t);
+};
+
 /// The valid lanes of `c` that hit, given their quotient t (cand_t) and the upper end.
 template <class T>
 [[gnu::always_inline]] inline auto confirmed(const typename T::Rays& r, const typename T::Cand& c,
                                              const decltype(c.t)& t, const decltype(c.t)& upper) {
-  if constexpr (QuotientDecides<T>)
+  if constexpr (QuotientChecked<T>)
     return T::confirm(r, c, t, upper);
   else
     return c.valid;
@@ -196,19 +204,22 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
       win_u = us[win_lane], win_v = vs[win_lane], win_den = dens[win_lane];
       win_prim = block.prim[win_lane];
     } else {
-      int lane = std::countr_zero(bits);
-      for (;;) {
-        upper = kScaled ? ts[lane] / dens[lane] : ts[lane];
-        upper_b = B(upper);
+      int win_lane = -1;
+      const float tmin = ray.ray.tmin;
+      while (bits != 0) {
+        const int lane = std::countr_zero(bits);
         bits &= ~((2u << lane) - 1u);  // lanes after `lane`
-        if (bits == 0) break;
-        bits &= detail::bits_from_mask<Arch>(T::accept(cand, upper_b));
-        if (bits == 0) break;
-        lane = std::countr_zero(bits);
+        const float t = kScaled ? ts[lane] / dens[lane] : ts[lane];
+        // A det-scaled decision is checked on its quotient too (MollerTest::confirm).
+        if (kScaled && !(tmin <= t && t < upper)) continue;
+        upper = t, win_lane = lane;
+        upper_b = B(upper);
+        if (bits != 0) bits &= detail::bits_from_mask<Arch>(T::accept(cand, upper_b));
       }
-      win_u = us[lane], win_v = vs[lane];
-      if constexpr (kScaled) win_den = dens[lane];
-      win_prim = block.prim[lane];
+      if (win_lane < 0) continue;
+      win_u = us[win_lane], win_v = vs[win_lane];
+      if constexpr (kScaled) win_den = dens[win_lane];
+      win_prim = block.prim[win_lane];
     }
   }
   if (win_prim == kInvalidPrim) return;
@@ -251,8 +262,11 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     }
     return false;
   } else {
-    for (std::uint32_t b = 0; b < count; ++b)
-      if (xsimd::any(T::test(rays, T::load_block(blocks[b], rays), upper).valid)) return true;
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+      if (xsimd::none(cand.valid)) continue;
+      if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t(cand), upper))) return true;
+    }
     return false;
   }
 }
@@ -330,7 +344,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K
     if (xsimd::none(cand.valid)) continue;
     const B t = detail::cand_t(cand);
     const M hit = detail::confirmed<T>(r, cand, t, upper);
-    if constexpr (detail::QuotientDecides<T>)
+    if constexpr (detail::QuotientChecked<T>)
       if (xsimd::none(hit)) continue;
     xsimd::select(hit, t, ht).store_aligned(hits.t + c);
     B u = cand.u, v = cand.v;
@@ -377,7 +391,8 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
           const M rest = T::prefilter(r, d, upper) & ~hit;
           if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
         } else {
-          hit = hit | T::test(r, T::broadcast_tri(block, j, r), upper).valid;
+          const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+          if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t(cand), upper);
         }
       }
       if (xsimd::all(hit | ~act)) break;

@@ -7,7 +7,7 @@
 // The hit decision uses the determinants themselves, with det's sign folded in:
 // u det >= 0, v det >= 0, (u + v) det <= |det|, tmin |det| <= t det < upper |det|. The
 // quotients are true divisions done only for hits (block_kernels.h): t of each accepted
-// lane, u and v of the final winner.
+// lane, which must also lie in [tmin, upper) (confirm), u and v of the final winner.
 #pragma once
 #include <limits>
 
@@ -66,6 +66,12 @@ struct MollerTest {
   /// The lanes of `c` still hit when the upper end shrinks to `upper` (<= the one test()
   /// saw): exactly what test() would have answered for it.
   [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
+  /// The valid lanes of `c` whose quotient t (= c.t / c.den) lies in [tmin, upper): the
+  /// scaled range test rounds its products, the quotient once more, so t alone could land
+  /// an ulp outside the range the API promises (the oracle checks the same).
+  [[gnu::always_inline]] inline static M confirm(const Rays& r, const Cand& c, B t, B upper) {
+    return c.valid & (r.tmin <= t) & (t < upper);
+  }
 
  private:
   /// a b + c: one rounding when fused (the oracle's std::fma), two otherwise (Fused = false).

@@ -4,7 +4,9 @@
 // GCC 12's avx512fintrin.h builds _mm512_max_ps / _mm512_min_ps on _mm512_undefined_ps(),
 // which -Wmaybe-uninitialized reports as uninitialized once inlined: a false positive of
 // the compiler's own header, silenced for this file only.
+#if !defined(__clang__)  // (clang has no such warning)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include "simd/wide_traverse.h"
 
 namespace volley::simd {

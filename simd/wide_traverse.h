@@ -10,9 +10,10 @@
 // near_z, tmin), exit = min(far_x, far_y, far_z, tmax) * kSlabExitPad (Robust; no padding
 // for Robust = false), hit when entry <= exit. NaN-safe operand order: every max/min is maxps/minps(distance, running
 // bound), which returns its second operand when either is NaN, so a NaN slab distance
-// (origin on a slab plane with a zero direction component) leaves the running bound
-// unchanged and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`.
-// The running bounds themselves are never NaN (NaN tmin / tmax rays are rejected first).
+// (0 * inf: an origin on a slab plane with a zero or subnormal direction component, whose
+// reciprocal is ±inf; or inf - inf in the fused form) leaves the running bound unchanged
+// and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`. The
+// running bounds themselves are never NaN (NaN tmin / tmax rays are rejected first).
 // Inert children (lo = +inf, hi = -inf) fail for every ray.
 // One exception, the single-ray walk: its far distances are (plane - org) * fl(inv * pad),
 // the padding folded into the reciprocal once per ray (same rounding bound, one multiply
@@ -112,7 +113,9 @@ struct WideKernels {
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
-  /// that find a nearer hit are written. Inactive lanes are neither read nor written.
+  /// that find a nearer hit are written. Inactive lanes are never hit, but the leaf kernels
+  /// load and store whole chunks of lanes (unchanged values in lanes without a hit):
+  /// Accel hands a packet with inactive lanes over as a copy.
   static void intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits);
   /// The active lanes of `rays` that some triangle occludes (tmin <= t < tmax), as a mask.
   static std::uint32_t occluded(const View& bvh, const RayPacket<K>& rays);
@@ -120,6 +123,12 @@ struct WideKernels {
   /// Single-ray traversal of the subtree `start` (the packet traversal's fallback).
   template <bool AnyHit>
   static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
+
+  /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
+  /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
+  /// fills `setup` (see PacketSetup). The frustum walk's common origin is that of the
+  /// first valid lane (a rejected lane's origin is no reference).
+  static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
 
  private:
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
@@ -144,10 +153,6 @@ struct WideKernels {
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
-  /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
-  /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
-  /// fills `setup` (see PacketSetup).
-  static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
   /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
   /// zero direction component (screen() says so); taken only for packets whose lanes share
@@ -418,7 +423,12 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
       }
       typename V8::V entry, exit;
       if constexpr (NoZero) {
-        // No NaN distance: combine as a tree.
+        // Combined as a tree. No direction component is ±0, but a subnormal one has an
+        // infinite reciprocal, so a distance can still be NaN (origin on the plane). The tree
+        // stays NaN-free: tmin / tmax8 are never NaN, so the right halves are not; a NaN left
+        // half then yields the right one. A NaN drops its partner distance too, which only
+        // lowers entry or raises exit: more boxes visited, never fewer (tests/accel:
+        // subnormal directions).
         entry = V8::max(V8::max(tnx, tny), V8::max(tnz, tmin));
         exit = V8::min(V8::min(tfx, tfy), V8::min(tfz, tmax8));
       } else {
@@ -584,7 +594,9 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
                                    _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)));  // |d1| |d2| |d2|
     const int c = _mm_movemask_ps(ge) & 7;
     const int n = _mm_movemask_ps(_mm_cmplt_ps(dir, zero)) & 7;
-    const int e = core::kWoopAxes[static_cast<std::size_t>(c | n << 3)];
+    // data()[]: with _GLIBCXX_ASSERTIONS (sanitizer builds) std::array's operator[] is an
+    // out-of-line weak function, which a per-ISA object must not define. The index is < 64.
+    const int e = core::kWoopAxes.data()[c | n << 3];
     const int kx = e & 3, ky = (e >> 2) & 3, kz = e >> 4;
     alignas(16) float q[4], r[4];
     _mm_store_ps(q, _mm_div_ps(dir, _mm_set1_ps(ray.dir[kz])));
@@ -652,8 +664,6 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   constexpr int C = K / L;
   const B zero(0.0f);
   std::uint32_t valid = 0, negx = 0, negy = 0, negz = 0, zeros = 0, other_origin = 0;
-  const int first = std::countr_zero(rays.active | (1u << (K - 1)));
-  const B fx(rays.ox[first]), fy(rays.oy[first]), fz(rays.oz[first]);
   for (int c = 0; c < C; ++c) {
     const int o = c * L;
     const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
@@ -674,7 +684,6 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
     negy |= (detail::bits_from_mask<Arch>(iy < zero) & okb) << o;
     negz |= (detail::bits_from_mask<Arch>(iz < zero) & okb) << o;
     zeros |= (detail::bits_from_mask<Arch>((dx == zero) | (dy == zero) | (dz == zero)) & okb) << o;
-    other_origin |= (detail::bits_from_mask<Arch>((ox != fx) | (oy != fy) | (oz != fz)) & okb) << o;
     // Rejected lanes become inert: org = dir = 0, tmin = 0, tmax = -inf.
     if (okb != kChunkBits) {
       xsimd::select(ok, ox, zero).store_aligned(rays.ox + o);
@@ -686,6 +695,15 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
       xsimd::select(ok, tmin, zero).store_aligned(rays.tmin + o);
       xsimd::select(ok, tmax, B(-std::numeric_limits<float>::infinity())).store_aligned(rays.tmax + o);
     }
+  }
+  // The common origin of the frustum walk: the first valid lane's (a rejected lane, NaN
+  // origin or not, would make every other lane differ).
+  const int first = std::countr_zero(valid | (1u << (K - 1)));
+  const B fx(rays.ox[first]), fy(rays.oy[first]), fz(rays.oz[first]);
+  for (int c = 0; c < C; ++c) {
+    const int o = c * L;
+    const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
+    other_origin |= (detail::bits_from_mask<Arch>((ox != fx) | (oy != fy) | (oz != fz)) & (valid >> o) & kChunkBits) << o;
   }
   rays.active = valid;
   setup.valid = valid;
@@ -744,8 +762,12 @@ std::uint32_t WideKernels<Arch, Test, Robust>::leaf_occluded(PreparedPacket<K>& 
 // at corners: the near distance is at least min(fl(d * inv_min), fl(d * inv_max)) with
 // d = fl(b - o) for the origin bound that makes d smallest along the ray (inv > 0: o_max;
 // inv < 0: o_min), and the far distance at most the max of the products of the other
-// bound. No NaN arises: every valid lane has a finite, nonzero direction (screen()), so
-// inv is finite and nonzero, and inert children give ±inf products. A child passes when
+// bound. Every valid lane has a finite, nonzero direction (screen()), but a subnormal
+// component has an infinite reciprocal, so a product 0 * inf (an origin bound on the plane)
+// can be NaN: min / max then take the other corner's product (0 for a zero difference), or
+// drop the axis at the entry / exit combination (tmin and far_hi are never NaN); the bounds
+// stay NaN-free (tests/accel: subnormal directions, against the oracle).
+// Inert children give ±inf products. A child passes when
 // max(near bounds, min tmin) <= min(far bounds, max tfar) * kSlabExitPad, which holds
 // whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
 // exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.

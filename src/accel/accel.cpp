@@ -74,7 +74,15 @@ void Accel::commit(const Options& options) {
   impl_->test = options.test;
   impl_->robust = options.robust;
   impl_->reference_double = options.reference_double;
-  impl_->build();
+  // A build that fails half way leaves no structure to query: uncommitted until it is done.
+  impl_->committed = false;
+  try {
+    impl_->build();
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory("commit: out of memory building the structure of " + std::to_string(impl_->triangle_ids.size()) +
+                      " triangles and " + std::to_string(impl_->polygons.size()) +
+                      " polygons; the Accel stays uncommitted (free memory, then commit again)");
+  }
   impl_->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   impl_->committed = true;
 }

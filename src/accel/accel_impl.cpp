@@ -55,11 +55,15 @@ Ray lane_ray(const RayPacket<K>& p, int i) {
   return Ray{{p.ox[i], p.oy[i], p.oz[i]}, p.tmin[i], {p.dx[i], p.dy[i], p.dz[i]}, p.tmax[i]};
 }
 
-/// Copies lanes 0 .. K of `p` into a 16-lane packet, the other lanes inert and inactive.
+/// Copies the active lanes of `p` into a 16-lane packet; every other lane is inert and
+/// inactive. The kernels load and store whole chunks of lanes, so a packet with inactive
+/// lanes reaches them only as this copy: the caller's inactive lanes are never read (they
+/// may be uninitialised) nor written (they may be another thread's).
 template <int K>
 void widen(const RayPacket<K>& p, RayPacket<16>& out) {
+  const std::uint32_t active = p.active & lane_bits(K);
   for (int i = 0; i < 16; ++i) {
-    if (i < K) {
+    if (i < K && (active >> i & 1u)) {
       out.ox[i] = p.ox[i], out.oy[i] = p.oy[i], out.oz[i] = p.oz[i];
       out.dx[i] = p.dx[i], out.dy[i] = p.dy[i], out.dz[i] = p.dz[i];
       out.tmin[i] = p.tmin[i], out.tmax[i] = p.tmax[i];
@@ -68,7 +72,13 @@ void widen(const RayPacket<K>& p, RayPacket<16>& out) {
       out.tmax[i] = -INFINITY;
     }
   }
-  out.active = p.active & lane_bits(K);
+  out.active = active;
+}
+
+/// Whether the kernels may take the caller's packet as it is: 16 lanes, all active.
+template <int K>
+bool all_lanes_active(const RayPacket<K>& p) {
+  return K == 16 && (p.active & lane_bits(K)) == lane_bits(K);
 }
 
 /// True when the directions of rays[0 .. n) share one octant (sign bits; -0 negative):
@@ -123,7 +133,8 @@ void Accel::Impl::build() {
   triangle_stats = core::bvh_stats(triangle_bvh, core::BvhBuildOptions{});
 
   if (wide) {
-    wide->build(triangle_bvh, &triangles[0].x, triangle_ids.data());
+    // data(), not &triangles[0]: a scene without triangles (empty or polygons only) has none.
+    wide->build(triangle_bvh, reinterpret_cast<const float*>(triangles.data()), triangle_ids.data());
     triangle_bvh = core::Bvh{};
   } else if (test == TriangleTest::plane && reference_double) {
     plane_triangles_double.reserve(n);
@@ -287,13 +298,17 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const 
     return;
   }
   if constexpr (K == 16) {
-    wide->intersect(rays, hits);
-  } else {
+    if (all_lanes_active(rays)) wide->intersect(rays, hits);
+  }
+  if (!all_lanes_active(rays)) {
     RayPacket<16> p;
     widen(rays, p);
     HitPacket<16> h;
     reset(h);
-    for (int i = 0; i < K; ++i) h.t[i] = hits.t[i], h.u[i] = hits.u[i], h.v[i] = hits.v[i], h.prim[i] = hits.prim[i];
+    for (std::uint32_t b = active; b != 0; b &= b - 1) {
+      const int i = __builtin_ctz(b);
+      h.t[i] = hits.t[i], h.u[i] = hits.u[i], h.v[i] = hits.v[i], h.prim[i] = hits.prim[i];
+    }
     wide->intersect(p, h);
     for (std::uint32_t b = active; b != 0; b &= b - 1) {
       const int i = __builtin_ctz(b);
@@ -317,8 +332,9 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays) const {
   std::uint32_t blocked = 0;
   if (wide) {
     if constexpr (K == 16) {
-      blocked = wide->occluded(rays);
-    } else {
+      if (all_lanes_active(rays)) blocked = wide->occluded(rays);
+    }
+    if (!all_lanes_active(rays)) {
       RayPacket<16> p;
       widen(rays, p);
       blocked = wide->occluded(p);

@@ -26,7 +26,8 @@ struct Failure {
 volley_status set_error(volley_status status, const char* function, const char* message) noexcept;
 
 /// Runs body() and returns VOLLEY_OK, or the status of the exception it threw:
-/// Failure -> its status; std::bad_alloc -> VOLLEY_ERROR_OUT_OF_MEMORY; volley::Error
+/// Failure -> its status; std::bad_alloc and volley::OutOfMemory ->
+/// VOLLEY_ERROR_OUT_OF_MEMORY; volley::Error
 /// (input the C++ layer rejected) -> `error_status`; anything else -> VOLLEY_ERROR_INTERNAL.
 template <class Body>
 volley_status guarded(const char* function, volley_status error_status, Body&& body) noexcept {
@@ -37,6 +38,8 @@ volley_status guarded(const char* function, volley_status error_status, Body&& b
     return set_error(f.status, function, f.message.c_str());
   } catch (const std::bad_alloc&) {
     return set_error(VOLLEY_ERROR_OUT_OF_MEMORY, function, "out of memory");
+  } catch (const OutOfMemory& e) {
+    return set_error(VOLLEY_ERROR_OUT_OF_MEMORY, function, e.what());
   } catch (const Error& e) {
     return set_error(error_status, function, e.what());
   } catch (const std::exception& e) {

@@ -3,6 +3,7 @@
 #include "capi/scene.h"
 
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -16,19 +17,30 @@ namespace {
 /// Prim ids available: kInvalidPrim itself is the miss marker.
 constexpr std::uint64_t kMaxPrims = kInvalidPrim;
 
-/// The C++ test for a C enum value; fails for one outside the enum.
-TriangleTest to_test(volley_triangle_test test) {
+/// The integer a C caller passed as an enum. C allows any int there, C++ only the values
+/// of the enum's range, so it is read as bytes: loading an out-of-range value as the enum
+/// would itself be undefined (UBSan's enum check caught the package test's bad values).
+template <class Enum>
+int raw_value(const Enum& e) {
+  static_assert(sizeof(Enum) == sizeof(int), "C enums are ints");
+  int v;
+  std::memcpy(&v, &e, sizeof v);
+  return v;
+}
+
+/// The C++ test for a C enum value (as raw_value); fails for one outside the enum.
+TriangleTest to_test(int test) {
   switch (test) {
     case VOLLEY_TEST_WATERTIGHT: return TriangleTest::watertight;
     case VOLLEY_TEST_PLANE: return TriangleTest::plane;
     case VOLLEY_TEST_MOLLER: return TriangleTest::moller;
   }
-  fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown triangle test " + std::to_string(int(test)) +
+  fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown triangle test " + std::to_string(test) +
                                           " (expected VOLLEY_TEST_WATERTIGHT, VOLLEY_TEST_PLANE or VOLLEY_TEST_MOLLER)");
 }
 
-/// The C++ ISA for a C enum value; fails for one outside the enum.
-Isa to_isa(volley_isa isa) {
+/// The C++ ISA for a C enum value (as raw_value); fails for one outside the enum.
+Isa to_isa(int isa) {
   switch (isa) {
     case VOLLEY_ISA_AUTO: return Isa::automatic;
     case VOLLEY_ISA_SCALAR: return Isa::scalar;
@@ -36,8 +48,7 @@ Isa to_isa(volley_isa isa) {
     case VOLLEY_ISA_AVX2: return Isa::avx2;
     case VOLLEY_ISA_AVX512: return Isa::avx512;
   }
-  fail(VOLLEY_ERROR_INVALID_ARGUMENT,
-       "unknown ISA " + std::to_string(int(isa)) + " (expected a VOLLEY_ISA_* value)");
+  fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown ISA " + std::to_string(isa) + " (expected a VOLLEY_ISA_* value)");
 }
 
 volley_triangle_test from_test(TriangleTest test) {
@@ -96,8 +107,8 @@ volley_status commit(volley_scene* scene, const volley_commit_options* in, const
     require_pointer(scene, "scene");
     require_pointer(in, "options");
     volley::Options options;
-    options.test = to_test(in->test);
-    options.isa = to_isa(in->isa);
+    options.test = to_test(raw_value(in->test));
+    options.isa = to_isa(raw_value(in->isa));
     options.robust = in->robust != 0;
     options.reference_double = in->reference_double != 0;
     if (options.reference_double && (options.isa != volley::Isa::scalar || !options.robust))
@@ -124,7 +135,7 @@ using namespace volley::capi;
 extern "C" {
 
 int volley_isa_supported(volley_isa isa) {
-  switch (isa) {
+  switch (raw_value(isa)) {
     case VOLLEY_ISA_AUTO:
     case VOLLEY_ISA_SCALAR: return 1;
     case VOLLEY_ISA_SSE42: return volley::simd::cpu_has(volley::Isa::sse42) ? 1 : 0;
@@ -196,8 +207,8 @@ void volley_commit_options_default(volley_commit_options* options) {
 volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa) {
   volley_commit_options options;
   volley_commit_options_default(&options);
-  options.test = test;
-  options.isa = isa;
+  std::memcpy(&options.test, &test, sizeof test);  // bytes, not enum loads (raw_value)
+  std::memcpy(&options.isa, &isa, sizeof isa);
   return commit(scene, &options, "volley_scene_commit");
 }
 

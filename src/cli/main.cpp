@@ -1,6 +1,7 @@
 // volley: command-line front end. Each subcommand lives in its own file (cmd_*.cpp).
 #include <cstdio>
 #include <exception>
+#include <new>
 
 #include <CLI/CLI.hpp>
 
@@ -30,6 +31,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "volley: error: %s\n", e.what());
   } catch (const volley::Error& e) {
     std::fprintf(stderr, "volley: error: %s\n", e.what());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "volley: error: out of memory (the scene or ray file is larger than this machine can hold)\n");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "volley: error: %s\n", e.what());
   }

@@ -67,8 +67,8 @@ T dot3(const Vec3<T>& a, const Vec3<T>& b) {
 /// (u det + v det) s <= |det|, tmin |det| <= t det s < tmax |det| (each product and sum
 /// rounded once). On a hit writes `hit` = {t, u, v} = the scaled values over det, true
 /// divisions (hit point = (1-u-v) p0 + u p1 + v p2) and returns true; on a miss returns
-/// false and leaves `hit` untouched. The scaled range test can let t land an ulp outside
-/// [tmin, tmax) by the rounding of the final division; t >= 0 whenever tmin >= 0.
+/// false and leaves `hit` untouched. The reported t is checked against [tmin, tmax) as
+/// well: the scaled range test alone lets it land an ulp outside by the division's rounding.
 ///
 /// The determinants are the triple products of Moller-Trumbore, factored as in Embree's
 /// Moller intersector so the normal n = (p1-p0) x (p2-p0) is computed once: a triangle with
@@ -104,8 +104,12 @@ bool intersect_moller(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, 
   // Half-plane tests and the half-open range tmin <= t < tmax, as one branch (`&`, not `&&`:
   // an aimed ray's hit/miss is hard to predict); each comparison is false for NaN.
   if (!((u >= 0) & (v >= 0) & (u + v <= den) & (ray.tmin * den <= t) & (t < ray.tmax * den))) return false;
+  // The scaled test rounds the products tmin |det| and tmax |det|, the quotient rounds
+  // once more: t / |det| can land an ulp outside [tmin, tmax). The reported t decides too.
+  const T tq = t / den;
+  if (!((ray.tmin <= tq) & (tq < ray.tmax))) return false;
 
-  hit = {t / den, u / den, v / den};
+  hit = {tq, u / den, v / den};
   return true;
 }
 

@@ -7,6 +7,11 @@
 
 namespace volley::io {
 
+/// The most corners one polygonal face of an OBJ or PLY file may have (a fan of
+/// kMaxFaceCorners - 2 triangles). A face beyond it is an error naming the limit: input
+/// that is no mesh (or an attack) would otherwise turn into memory without bound.
+inline constexpr std::size_t kMaxFaceCorners = 1000000;
+
 /// Bad or unreadable input. what() reads `FILE:LINE:COL: what was expected`, or
 /// `FILE:LINE: ...` / `FILE: ...` when the column / line is not known (for JSON
 /// validation errors the text after `FILE: ` starts with the JSON path, e.g.

@@ -230,6 +230,8 @@ void ObjParser::parse_face(const char* p, const char* e) {
     }
     if (p < e && !is_blank(*p) && *p != '#')
       fail(at, "expected a face corner v, v/vt, v//vn or v/vt/vn, found " + quoted_token(at, e));
+    if (face_.size() == kMaxFaceCorners)
+      fail(at, "a face has more than " + std::to_string(kMaxFaceCorners) + " corners (the limit of one face)");
     face_.push_back(c);
   }
   if (face_.size() < 3)
@@ -285,8 +287,15 @@ std::map<std::string, Material> read_libraries(const std::filesystem::path& file
   std::map<std::string, Material> by_name;
   for (const auto& lib : libraries) {
     const std::filesystem::path path = file.parent_path() / lib.name;
-    std::ifstream in(path, std::ios::binary);
     const std::string where = file.string() + ':' + std::to_string(lib.line) + ": ";
+    std::error_code ec;
+    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec)) {
+      // A device or pipe (mtllib /dev/zero) could be endless.
+      warn(where + "material library \"" + lib.name + "\" is not a regular file (" + path.string() +
+           "); its materials use the default material");
+      continue;
+    }
+    std::ifstream in(path, std::ios::binary);
     if (!in) {
       warn(where + "material library \"" + lib.name + "\" not found (looked for " + path.string() +
            "); its materials use the default material");

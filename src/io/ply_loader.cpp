@@ -223,6 +223,20 @@ void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
     }
   }
 
+  // Counts the body cannot hold fail before anything is allocated for them: each record
+  // of an element with P properties is at least P one-character tokens with a separator
+  // after all but the file's last.
+  const std::size_t body_bytes = text.size() - header.body_offset;
+  for (const Element& e : header.elements) {
+    const std::size_t min_bytes = 2 * e.properties.size();
+    if (min_bytes != 0 && e.count > (body_bytes + 1) / min_bytes)
+      throw LoadError(file, "the header claims " + std::to_string(e.count) + " " + e.name + " records, but the " +
+                                std::to_string(body_bytes) + " bytes after end_header hold at most " +
+                                std::to_string((body_bytes + 1) / min_bytes) + " (truncated or corrupt file)");
+  }
+  if (vertex_count >= 0xffffffffu)
+    throw LoadError(file, "the header claims " + std::to_string(vertex_count) + " vertices; the limit is 2^32 - 2");
+
   std::vector<glm::vec3> positions;
   std::vector<std::uint32_t> indices;
   positions.reserve(vertex_count);
@@ -236,7 +250,8 @@ void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
     const int z = is_vertex ? property_index(e, "z") : -1;
     int list = is_face ? property_index(e, "vertex_indices") : -1;
     if (is_face && list < 0) list = property_index(e, "vertex_index");
-    for (std::size_t n = 0; n < e.count; ++n) {
+    // An element without properties has no data, whatever its count.
+    for (std::size_t n = 0; n < e.count && !e.properties.empty(); ++n) {
       glm::vec3 p{0.0f};
       for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
         const Property& prop = e.properties[k];
@@ -247,6 +262,9 @@ void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
         } else if (k == list) {
           const long long count = in.integer("a face's vertex count");
           if (count < 3) in.fail("a face needs at least 3 vertices, found " + std::to_string(count));
+          if (static_cast<unsigned long long>(count) > kMaxFaceCorners)
+            in.fail("a face has " + std::to_string(count) + " corners, more than " + std::to_string(kMaxFaceCorners) +
+                    " (the limit of one face)");
           face.clear();
           for (long long i = 0; i < count; ++i) {
             const long long index = in.integer("a vertex index");

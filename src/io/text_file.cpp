@@ -15,6 +15,8 @@ std::string read_text_file(const std::filesystem::path& file) {
   const auto status = std::filesystem::status(file, ec);
   if (!std::filesystem::exists(status)) throw LoadError(file, "file not found");
   if (std::filesystem::is_directory(status)) throw LoadError(file, "is a directory, expected a file");
+  // A device or pipe (/dev/zero, /dev/stdin) could be endless: regular files only.
+  if (!std::filesystem::is_regular_file(status)) throw LoadError(file, "is not a regular file, expected a file");
 
   // stdio rather than iostreams: one fread of the whole file is the fastest portable read.
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(file.c_str(), "rb"), &std::fclose);

@@ -68,7 +68,7 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data(), indices_.size() / 3);
   for (const auto& poly : desc.polygons) {
     try {
-      accel_.add_polygon(&poly.vertices[0].x, poly.vertices.size());
+      accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
     } catch (const Error& e) {
       throw Error("polygon '" + poly.name + "': " + e.what());
     }

@@ -19,6 +19,14 @@ class VOLLEY_API Error : public std::runtime_error {
   using std::runtime_error::runtime_error;  ///< constructed from the message
 };
 
+/// Thrown by commit() when memory runs out while building (a std::bad_alloc inside,
+/// turned into a message that says what was being built). The Accel is then left
+/// uncommitted: queries throw Error until a commit succeeds.
+class VOLLEY_API OutOfMemory : public Error {
+ public:
+  using Error::Error;  ///< constructed from the message
+};
+
 /// Facts about a committed Accel (for `volley info` and --stats). With a SIMD ISA the
 /// triangle BVH is the wide BVH (`width` children per node, leaves of triangle blocks of
 /// `block_width` lanes); with Isa::scalar it is the oracle's binary BVH (width 2, block 1).
@@ -76,7 +84,8 @@ class VOLLEY_API Accel {
 
   /// Builds the acceleration structure. Call again after adding more geometry. Throws
   /// Error (leaving the Accel unchanged) when the CPU lacks options.isa, or when
-  /// options.reference_double is set with an ISA other than scalar or with robust = false.
+  /// options.reference_double is set with an ISA other than scalar or with robust = false;
+  /// OutOfMemory (leaving it uncommitted) when memory runs out while building.
   void commit(const Options& options = {});
 
   /// Closest hit along the ray (tmin <= t < tmax), or a miss. A ray with a non-finite

@@ -138,15 +138,27 @@ inline void check_packets(const Accel& accel, const std::vector<Ray>& rays, cons
     if (shape == 1 && count > 1) count = K - 1 < count ? K - 1 : count;
     volley::load(p, rays.data() + first, count);
     if (shape == 2) p.active &= static_cast<std::uint32_t>(rng()) | 1u;
-    // Inactive lanes hold a sentinel that must survive.
+    // Inactive lanes hold garbage rays (ignored whatever they hold) and sentinel hits that
+    // must survive bit for bit: a signalling NaN in u turns quiet if a kernel so much as
+    // divides it by 1 and stores it back (what a whole-chunk store did).
     volley::reset(h);
-    for (int i = 0; i < K; ++i)
-      if (!((p.active >> i) & 1u)) h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
+    for (int i = 0; i < K; ++i) {
+      if ((p.active >> i) & 1u) continue;
+      p.ox[i] = p.dy[i] = kNaN, p.oy[i] = 1e30f, p.oz[i] = -kInf, p.dx[i] = 0.0f, p.dz[i] = 1.0f;
+      p.tmin[i] = -kInf, p.tmax[i] = kInf;
+      h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
+      const std::uint32_t snan = 0x7f800001u, ones = 0xffffffffu;
+      std::memcpy(&h.u[i], &snan, 4);
+      std::memcpy(&h.v[i], &ones, 4);
+    }
+    const volley::HitPacket<K> before = h;
     accel.intersect(p, h);
     const std::uint32_t mask = accel.occluded(p);
     for (int i = 0; i < K; ++i) {
       if (!((p.active >> i) & 1u)) {
-        f.inactive_written += h.t[i] != 12345.0f || h.prim[i] != 0xdeadbeefu || ((mask >> i) & 1u);
+        f.inactive_written += std::memcmp(&h.t[i], &before.t[i], 4) != 0 || std::memcmp(&h.u[i], &before.u[i], 4) != 0 ||
+                              std::memcmp(&h.v[i], &before.v[i], 4) != 0 || h.prim[i] != before.prim[i] ||
+                              ((mask >> i) & 1u);
         continue;
       }
       ++f.lanes;

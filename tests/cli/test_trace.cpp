@@ -82,7 +82,8 @@ render::Scene load_scene(const std::string& file, int width, int height) {
 }  // namespace
 
 TEST_CASE("workloads: block order covers every pixel once, 4x4 blocks first, clipped at the edges") {
-  for (auto [w, h] : {std::pair{8, 8}, std::pair{6, 5}, std::pair{2, 2}, std::pair{17, 3}}) {
+  for (const auto& size : {std::pair{8, 8}, std::pair{6, 5}, std::pair{2, 2}, std::pair{17, 3}}) {
+    const int w = size.first, h = size.second;  // not a structured binding: CAPTURE takes them by reference (clang 14)
     CAPTURE(w);
     CAPTURE(h);
     const auto order = render::block_order(w, h);

@@ -10,7 +10,7 @@
 #   volley::Accel members but Accel::Impl's     the C++ API (accel.h); templates carry
 #                                               their return type in the demangled name
 #   volley::to_string / parse_isa / parse_triangle_test   (options.h)
-#   typeinfo, typeinfo name and vtable of volley::Error   (accel.h: catch across the boundary)
+#   typeinfo, typeinfo name and vtable of volley::Error and volley::OutOfMemory (accel.h: catch across the boundary)
 set -eu
 
 [ $# -eq 1 ] || { echo "usage: $0 LIBVOLLEY.so" >&2; exit 2; }
@@ -23,7 +23,7 @@ symbols=$(nm -D --defined-only -C "$lib" | sed -E 's/^[0-9a-f]* *[A-Za-z] //')
 api='^volley_[a-z0-9_]+$'
 api="$api|^((void|unsigned int|bool) )?volley::Accel::(Accel\(|~Accel\(|[a-z])"
 api="$api|^volley::(to_string|parse_isa|parse_triangle_test)\("
-api="$api|^(typeinfo|typeinfo name|vtable) for volley::Error$"
+api="$api|^(typeinfo|typeinfo name|vtable) for volley::(Error|OutOfMemory)$"
 
 status=0
 extra=$(printf '%s\n' "$symbols" | grep -Ev "$api" | grep . || true)

@@ -280,6 +280,21 @@ TEST_CASE("obj: unreadable files and non-finite results of the transform") {
   const std::string is_dir = dir.path().string() + ": is a directory, expected a file";
   CHECK_THROWS_WITH_AS(load(dir.path()), is_dir.c_str(), LoadError);
 
+  const std::string device = "/dev/zero: is not a regular file, expected a file";
+  CHECK_THROWS_WITH_AS(load("/dev/zero"), device.c_str(), LoadError);
+  // An MTL that is a device is a warning (as a missing one), never an endless read.
+  const auto device_mtl = dir.write("device_mtl.obj", "mtllib /dev/zero\nusemtl x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  CHECK(load(device_mtl).mesh.indices.size() == 3);
+
+  // A face beyond the corner limit (10^7 corners: 3 x 10^7 bytes of file would become a
+  // fan of 10^7 triangles) fails at the first corner past it.
+  std::string corners = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf";
+  for (std::size_t i = 0; i <= volley::io::kMaxFaceCorners; ++i) corners += " 1";
+  const auto many = dir.write("many_corners.obj", corners + "\n");
+  const std::string too_many = many.string() + ":4:" + std::to_string(3 + 2 * volley::io::kMaxFaceCorners) +
+                               ": a face has more than 1000000 corners (the limit of one face)";
+  CHECK_THROWS_WITH_AS(load(many), too_many.c_str(), LoadError);
+
   const auto big = dir.write("big.obj", "v 3e38 0 0\nv 0 0 0\nv 0 1 0\nf 1 2 3\n");
   const std::string overflow = big.string() + ": vertex 1 is not finite after the object transform";
   CHECK_THROWS_WITH_AS(load(big, glm::scale(glm::mat4(1.0f), glm::vec3(10.0f))), overflow.c_str(), LoadError);

@@ -114,8 +114,12 @@ TEST_CASE("ply: bad input throws LoadError with FILE:LINE:COL") {
        "vertex index 4 is out of range: the file has 4 vertices (indices start at 0)"},
       {"negative index", kHeader + vertices + "3 0 1 2\n3 0 -1 2\n", ":17:5",
        "vertex index -1 is out of range: the file has 4 vertices (indices start at 0)"},
-      {"NaN coordinate", kHeader + "0 0 0 1\n1 nan 0 1\n", ":13:3", "expected a finite vertex coordinate, found \"nan\""},
-      {"garbage coordinate", kHeader + "0 0 0 1\n1 0 0,5 1\n", ":13:5", "expected a vertex coordinate, found \"0,5\""},
+      {"NaN coordinate", kHeader + "0 0 0 1\n1 nan 0 1\n1 1 0 1\n0 1 0 1\n", ":13:3",
+       "expected a finite vertex coordinate, found \"nan\""},
+      {"garbage coordinate", kHeader + "0 0 0 1\n1 0 0,5 1\n1 1 0 1\n0 1 0 1\n", ":13:5",
+       "expected a vertex coordinate, found \"0,5\""},
+      {"a face beyond the corner limit", kHeader + vertices + "3 0 1 2\n1000001 0 1 2\n", ":17:1",
+       "a face has 1000001 corners, more than 1000000 (the limit of one face)"},
       {"face with two vertices", kHeader + vertices + "2 0 1\n", ":16:1", "a face needs at least 3 vertices, found 2"},
       {"file ends early", kHeader + vertices + "3 0 1 2\n3 0 1", ":17:6", "file ends early: expected a vertex index"},
       {"trailing data", kHeader + vertices + "3 0 1 2\n3 0 1 2\n7\n", ":18:1", "unexpected data after the last element"},
@@ -136,4 +140,28 @@ TEST_CASE("ply: bad input throws LoadError with FILE:LINE:COL") {
   const auto missing = dir.path() / "missing.ply";
   const std::string not_found = missing.string() + ": file not found";
   CHECK_THROWS_WITH_AS(load_ply(missing, kIdentity, std::nullopt, s), not_found.c_str(), LoadError);
+}
+
+TEST_CASE("ply: a header that claims more than the file holds fails before allocating it") {
+  TempDir dir;
+  // 10^12 vertices of 3 floats would be 12 TB: the message names the claim and what the
+  // body can hold, and nothing that large is reserved (std::bad_alloc was the message).
+  const auto huge = dir.write("huge.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\n"
+                              "property float y\nproperty float z\nend_header\n0 0 0\n");
+  SceneDesc s;
+  const std::string expected = huge.string() +
+                               ": the header claims 1000000000000 vertex records, but the 6 bytes after end_header "
+                               "hold at most 1 (truncated or corrupt file)";
+  CHECK_THROWS_WITH_AS(load_ply(huge, kIdentity, std::nullopt, s), expected.c_str(), LoadError);
+  // An element without properties holds no data whatever its count: skipped at once.
+  const auto empty_elements = dir.write("empty_elements.ply",
+                                        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float "
+                                        "y\nproperty float z\nelement nothing 1000000000000000\nelement face 1\n"
+                                        "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  load_ply(empty_elements, kIdentity, std::nullopt, s);
+  CHECK(s.mesh.indices.size() == 3);
+  // Not a regular file: /dev/zero would never end.
+  const std::string device = "/dev/zero: is not a regular file, expected a file";
+  CHECK_THROWS_WITH_AS(load_ply("/dev/zero", kIdentity, std::nullopt, s), device.c_str(), LoadError);
 }

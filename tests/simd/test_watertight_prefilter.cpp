@@ -94,7 +94,9 @@ TEST_CASE("watertight oracle: the prefilter never decides, the quotient agrees w
         INFO("scale ", scale, " dscale ", dscale, " t ", c.t);
         REQUIRE(float(double(s.ts) / double(s.det)) == c.t);  // the test's copy of the oracle's steps
         const float ad = std::abs(s.det), ts_s = s.det < 0 ? -s.ts : s.ts;
-        for (const auto& [tmin, tmax] : intervals(c.t)) {
+        for (const auto& interval : intervals(c.t)) {
+          // Named copies, not a structured binding: INFO captures them in a lambda (clang 14).
+          const float tmin = interval.first, tmax = interval.second;
           const RayF r{V3(c.ray.org[0], c.ray.org[1], c.ray.org[2]), tmin, V3(c.ray.dir[0], c.ray.dir[1], c.ray.dir[2]),
                        tmax};
           volley::core::TriHit<float> h;
