@@ -16,6 +16,7 @@ elseif(VOLLEY_SANITIZE STREQUAL "address")
   set(VOLLEY_SANITIZE_FLAGS -fsanitize=address,undefined -fno-sanitize=vptr,function -fno-sanitize-recover=all)
 elseif(VOLLEY_SANITIZE STREQUAL "thread")
   set(VOLLEY_SANITIZE_FLAGS -fsanitize=thread)
+  add_compile_definitions(VOLLEY_SANITIZE_THREAD=1)  # core/tsan_one_thread.h
 else()
   message(FATAL_ERROR "VOLLEY_SANITIZE='${VOLLEY_SANITIZE}': expected address, thread or empty")
 endif()

@@ -147,4 +147,8 @@ if(VOLLEY_BUILD_TESTS)
     set_property(TEST "package: install, find_package(volley), build and run tests/consumer" APPEND PROPERTY
       ENVIRONMENT "CC=clang;CXX=clang++;CFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING};CXXFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING};LDFLAGS=${VOLLEY_SANITIZE_FLAGS_STRING}")
   endif()
+  if(VOLLEY_SANITIZE STREQUAL "thread")
+    set_property(TEST "package: install, find_package(volley), build and run tests/consumer" APPEND PROPERTY
+      ENVIRONMENT "TSAN_OPTIONS=halt_on_error=1:suppressions=${PROJECT_SOURCE_DIR}/tests/tsan.supp")
+  endif()
 endif()

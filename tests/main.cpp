@@ -1,3 +1,5 @@
 // doctest entry point shared by every test executable.
 #define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
 #include <doctest/doctest.h>
+
+#include "core/tsan_one_thread.h"  // (ThreadSanitizer build only)

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli/commands.h"
+#include "core/tsan_one_thread.h"  // (ThreadSanitizer build only)
 #include "io/load_error.h"
 #include "volley/accel.h"
 
