@@ -1,4 +1,4 @@
-// 64-byte aligned heap storage for SoA blocks and packets (STYLE rule 4).
+// 64-byte aligned heap storage for SoA blocks and packets (docs/style.md rule 4).
 // Baseline code only: per-ISA files must not instantiate these (they are not tagged
 // with an arch, see check_weak_symbols.sh).
 #pragma once

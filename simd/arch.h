@@ -12,7 +12,7 @@ namespace volley::simd {
 
 /// SSE4.2 kernels (4 float lanes); built into isa_sse42.cpp only.
 using Sse42 = xsimd::sse4_2;
-/// AVX2 + FMA kernels (8 float lanes); built into isa_avx2.cpp only. STYLE.md: plain
+/// AVX2 + FMA kernels (8 float lanes); built into isa_avx2.cpp only. docs/style.md: plain
 /// xsimd::avx2 would never emit FMA.
 using Avx2 = xsimd::fma3<xsimd::avx2>;
 /// AVX-512 F/DQ/BW/VL kernels (16 float lanes); built into isa_avx512.cpp only.
@@ -21,7 +21,7 @@ using Avx512 = xsimd::avx512bw;
 /// encodings and 32 registers): one ray against the 8-triangle blocks of an AVX-512 wide
 /// BVH, whose leaves are sized for 8 (narrower leaves were measured 3-10% faster for shadow
 /// rays than 16-triangle ones; perf/embree.md). xsimd treats it as AVX2 + FMA; a tag of its
-/// own keeps its symbols apart from isa_avx2.cpp's (STYLE rule 2). Built into
+/// own keeps its symbols apart from isa_avx2.cpp's (docs/style.md rule 2). Built into
 /// isa_avx512.cpp only.
 struct Avx512Ymm : xsimd::fma3<xsimd::avx2> {
   static constexpr char const* name() noexcept { return "avx512ymm"; }

@@ -5,7 +5,7 @@
 # Without --isa the ISA of each object is read from its name (isa_sse42, isa_avx2,
 # isa_avx512). Exit 0 when clean, 1 when a symbol is untagged, 2 on a usage error.
 #
-# Why (STYLE.md rule 2): an inline or template function compiled in isa_avx2.cpp is a weak
+# Why (docs/style.md rule 2): an inline or template function compiled in isa_avx2.cpp is a weak
 # symbol; if a baseline file (or isa_sse42.cpp) emits the same symbol, the linker keeps one
 # copy, possibly the AVX2 one, and the baseline caller dies with an illegal instruction on
 # an older CPU. Such a clash is impossible only for functions whose name carries an arch

@@ -1,5 +1,5 @@
 // AVX-512 kernels (this file alone is compiled with -mavx512f/dq/bw/vl -mavx2 -mfma).
-// Explicit instantiations only (STYLE rule 2): the bodies live in block_kernels.h and the
+// Explicit instantiations only (docs/style.md rule 2): the bodies live in block_kernels.h and the
 // test headers, and check_weak_symbols.sh verifies that every weak symbol here is tagged.
 #include "simd/block_kernels.h"
 

@@ -1,5 +1,5 @@
 // Small helpers shared by the triangle kernels. Everything here is templated on Arch
-// (STYLE rule 2): it is compiled only inside the per-ISA files, and every symbol it can
+// (docs/style.md rule 2): it is compiled only inside the per-ISA files, and every symbol it can
 // emit carries the arch tag.
 #pragma once
 #include <cmath>

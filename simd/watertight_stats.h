@@ -1,4 +1,4 @@
-// Counter of the watertight kernels' double-precision fallback (ACCURACY.md: on grid-like
+// Counter of the watertight kernels' double-precision fallback (docs/accuracy.md: on grid-like
 // input an edge function is exactly 0 in several percent of tests).
 #pragma once
 #include <cstdint>

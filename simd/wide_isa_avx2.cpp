@@ -1,5 +1,5 @@
 // Wide-BVH traversal kernels for AVX2 + FMA (this file alone, with isa_avx2.cpp, is compiled with
-// the AVX2 + FMA flags). Explicit instantiations only (STYLE rule 2): the bodies live in
+// the AVX2 + FMA flags). Explicit instantiations only (docs/style.md rule 2): the bodies live in
 // wide_traverse.h, and check_weak_symbols.sh verifies that every weak symbol is tagged.
 #include "simd/wide_traverse.h"
 

@@ -1,5 +1,5 @@
 // Wide-BVH traversal kernels for AVX-512 (this file alone, with isa_avx512.cpp, is compiled with
-// the AVX-512 flags). Explicit instantiations only (STYLE rule 2): the bodies live in
+// the AVX-512 flags). Explicit instantiations only (docs/style.md rule 2): the bodies live in
 // wide_traverse.h, and check_weak_symbols.sh verifies that every weak symbol is tagged.
 // GCC 12's avx512fintrin.h builds _mm512_max_ps / _mm512_min_ps on _mm512_undefined_ps(),
 // which -Wmaybe-uninitialized reports as uninitialized once inlined: a false positive of

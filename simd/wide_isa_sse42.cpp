@@ -1,5 +1,5 @@
 // Wide-BVH traversal kernels for SSE4.2 (this file alone, with isa_sse42.cpp, is compiled with
-// the SSE4.2 flags). Explicit instantiations only (STYLE rule 2): the bodies live in
+// the SSE4.2 flags). Explicit instantiations only (docs/style.md rule 2): the bodies live in
 // wide_traverse.h, and check_weak_symbols.sh verifies that every weak symbol is tagged.
 #include "simd/wide_traverse.h"
 

@@ -1,4 +1,4 @@
-// Closed indexed meshes with float-exact vertices for leak measurements (ACCURACY.md stress
+// Closed indexed meshes with float-exact vertices for leak measurements (docs/accuracy.md stress
 // items 1, 2, 8), their exact targets (shared vertices, edge midpoints, quad diagonals) and
 // interior origins.
 #pragma once

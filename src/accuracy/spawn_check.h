@@ -1,4 +1,4 @@
-// Self-intersection of spawned rays (ACCURACY.md, stress catalogue item 10): rays hit a
+// Self-intersection of spawned rays (docs/accuracy.md, stress catalogue item 10): rays hit a
 // tilted triangle at a given scale, a secondary ray leaves each hit point in a random
 // direction (either side: reflection- and transmission-like) from the renderer's spawn
 // offset (render/spawn.h), and an occlusion query tells whether it finds its own triangle

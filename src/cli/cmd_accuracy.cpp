@@ -1,5 +1,5 @@
 // volley accuracy: the accuracy report (run time against error) of every triangle test x
-// ISA x query mode x traversal, written to perf/accuracy/ (ACCURACY.md, issue 5).
+// ISA x query mode x traversal, written to perf/accuracy/ (docs/accuracy.md, issue 5).
 #include <algorithm>
 #include <chrono>
 #include <cmath>

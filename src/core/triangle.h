@@ -1,5 +1,4 @@
-// Scalar oracle: the three ray/triangle tests behind one switch (DESIGN.md, "Three
-// triangle tests"), and the degenerate-triangle predicate the builders share.
+// Scalar oracle: the three ray/triangle tests behind one switch (docs/kernels.md), and the degenerate-triangle predicate the builders share.
 #pragma once
 #include <cmath>
 

@@ -15,7 +15,7 @@ namespace volley::core {
 /// `Fused`): only where the ISA has an FMA instruction, AVX2 and AVX-512. SSE4.2 and the
 /// scalar oracle (built for x86-64-v2, where std::fma is a libm call of ~2 ns) compute
 /// unfused. The two formulations can differ on hit/miss for ill-conditioned rays
-/// (ACCURACY.md item 13), so whatever compares an ISA with the oracle uses this variant.
+/// (docs/accuracy.md, stress item 13), so whatever compares an ISA with the oracle uses this variant.
 /// `automatic` is no formulation: resolve it first (throws std::invalid_argument).
 constexpr bool moller_fused_for(volley::Isa isa) {
   switch (isa) {

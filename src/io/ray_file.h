@@ -1,5 +1,5 @@
 // Ray files (.vray) and hit files (.vhit): the rays `volley rays` writes and `volley trace`
-// reads, and the answers `volley trace -o` writes. Formats (DESIGN.md), little-endian:
+// reads, and the answers `volley trace -o` writes. Formats (README, "Tracing ray files"), little-endian:
 //
 //   .vray  "VRAY"  u32 version = 1  u64 count  count x { f32 ox oy oz tmin dx dy dz tmax }   32 B
 //   .vhit  "VHIT"  u32 version = 1  u64 count  count x { f32 t u v; u32 prim }                16 B

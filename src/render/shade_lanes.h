@@ -6,7 +6,7 @@
 // results back hit by hit. Every expression mirrors Scene::surface_as, render::hit_point,
 // queue_direct_lighting and spawn_shadow_ray operation for operation (no contraction:
 // the per-ISA files are compiled with -ffp-contract=off), so the results are bit-identical.
-// STYLE rule 2: nothing here but code templated on Arch (no GLM); the per-ISA files
+// docs/style.md rule 2: nothing here but code templated on Arch (no GLM); the per-ISA files
 // shade_lanes_isa_<isa>.cpp hold the explicit instantiations.
 #pragma once
 #include <cstddef>

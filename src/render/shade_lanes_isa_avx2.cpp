@@ -1,4 +1,4 @@
-// Batch-shading lanes for AVX2 (8 lanes; no FMA is emitted: -ffp-contract=off): explicit instantiation only (STYLE rule
+// Batch-shading lanes for AVX2 (8 lanes; no FMA is emitted: -ffp-contract=off): explicit instantiation only (docs/style.md rule
 // 2).
 #include "render/shade_lanes.h"
 

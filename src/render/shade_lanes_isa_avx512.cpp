@@ -1,4 +1,4 @@
-// Batch-shading lanes for AVX-512 (16 lanes): explicit instantiation only (STYLE rule 2).
+// Batch-shading lanes for AVX-512 (16 lanes): explicit instantiation only (docs/style.md rule 2).
 // GCC 12 warns that _mm512_sqrt_ps's own undefined pass-through operand "may be used
 // uninitialized" (a false positive inside avx512fintrin.h).
 #if !defined(__clang__)  // (clang has no such warning)

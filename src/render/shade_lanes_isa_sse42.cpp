@@ -1,4 +1,4 @@
-// Batch-shading lanes for SSE4.2 (4 lanes, the build's baseline): explicit instantiation only (STYLE rule 2).
+// Batch-shading lanes for SSE4.2 (4 lanes, the build's baseline): explicit instantiation only (docs/style.md rule 2).
 #include "render/shade_lanes.h"
 
 namespace volley::render {

@@ -1,7 +1,7 @@
 // Spawning secondary rays without re-hitting the surface they leave: the origin is moved
 // off the surface by the hit point's rounding-error bound along the normal, then rounded
 // away from it (pbrt-v4's OffsetRayOrigin; Pharr, Jakob, Humphreys 2023, 6.8.6).
-// A fixed epsilon fails at large and small scales (ACCURACY.md).
+// A fixed epsilon fails at large and small scales (docs/accuracy.md).
 #pragma once
 #include <algorithm>
 #include <bit>

@@ -1,7 +1,7 @@
 // The scalar BVH (bbox.h, bvh.h, bvh_build.cpp, bvh_traverse.h): structural invariants
 // of the binned-SAH build, and closest-hit / any-hit traversal against brute force over
 // every primitive, on random soups, axis-aligned grids with rays on slab planes
-// (ACCURACY.md stress item 4), degenerate inputs and the shared benchmark meshes.
+// (docs/accuracy.md stress item 4), degenerate inputs and the shared benchmark meshes.
 #include <doctest/doctest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The kernels on the inputs that break ray/triangle code (ACCURACY.md stress catalogue),
+// The kernels on the inputs that break ray/triangle code (docs/accuracy.md stress catalogue),
 // every test x ISA x form, each answer compared with the scalar oracle: NaN/Inf origins
 // and directions, zero direction components, odd search intervals, degenerate triangles,
 // rays aimed exactly at vertices and edges, origins on the triangle.

@@ -42,7 +42,7 @@ void single_ray(unsigned seed, int leaves, int rays_per_leaf) {
   CHECK(closest.mismatches == 0);
   CHECK(any.mismatches == 0);
   CHECK(closest.worst_ulps <= kMaxUlps);
-  // The generator must produce both answers in quantity (STYLE: generators check themselves).
+  // The generator must produce both answers in quantity (docs/accuracy.md, stress item 14).
   CHECK(closest.hits > closest.compared / 5);
   CHECK(closest.hits < closest.compared * 9 / 10);
 }

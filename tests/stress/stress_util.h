@@ -1,4 +1,4 @@
-// Shared helpers of the numerical stress suite (ACCURACY.md, stress catalogue): doctest
+// Shared helpers of the numerical stress suite (docs/accuracy.md, stress catalogue): doctest
 // wrappers around src/accuracy/ (the mesh type, the ISA list, the query modes of the public
 // API, the double-precision ray/triangle reference, shared with `volley accuracy`), the
 // Coverage check of generators, and the VOLLEY_STRESS_LONG switch.
@@ -62,7 +62,7 @@ inline const std::vector<Isa>& isas() {
 /// Item 13 compares hit/miss across the ISAs of one formulation group: plane computes the
 /// same everywhere (group 0), moller and watertight fuse on AVX2/AVX-512 (group 1) but not
 /// in the scalar oracle and SSE4.2 (group 0), and the two formulations may differ on hit/miss
-/// for ill-conditioned rays (grazing, rays through shared edges; ACCURACY.md item 13).
+/// for ill-conditioned rays (grazing, rays through shared edges; docs/accuracy.md, stress item 13).
 inline int agreement_group(TriangleTest test, Isa isa) {
   if (test == TriangleTest::moller) return volley::core::moller_fused_for(isa) ? 1 : 0;
   if (test == TriangleTest::watertight) return volley::core::watertight_fused_for(isa) ? 1 : 0;

@@ -1,4 +1,4 @@
-// Numerical stress suite (ACCURACY.md, stress catalogue) — bad rays and the tmin = 0 edge:
+// Numerical stress suite (docs/accuracy.md, stress catalogue) — bad rays and the tmin = 0 edge:
 //   11 NaN / Inf origins or directions, zero directions, tmin > tmax, tmin == tmax, NaN tmin
 //      or tmax miss; tmax = +inf is an ordinary ray; in packets and streams the good lanes
 //      give exactly their single-ray answers (no crash, no endless traversal)
@@ -225,7 +225,7 @@ TEST_CASE("stress 12/13: origin exactly on a triangle with tmin = 0 (pinned beha
     // - watertight: the own triangle comes back at |t| up to ~3e-6, not 0 (the shear
     //   transform rounds); where the rounded t is negative (18-21% here, leaving and entering
     //   alike) the ray passes on to the next surface. So with tmin = 0 a spawned ray may or
-    //   may not re-hit its origin triangle: spawn code must offset (ACCURACY.md).
+    //   may not re-hit its origin triangle: spawn code must offset (docs/accuracy.md).
     CHECK(self[in_plane] == 0);
     CHECK(other[in_plane] == 0);
     if (test == TriangleTest::watertight) {

@@ -1,4 +1,4 @@
-// Numerical stress suite (ACCURACY.md, stress catalogue) — hard geometry, every ISA this CPU
+// Numerical stress suite (docs/accuracy.md, stress catalogue) — hard geometry, every ISA this CPU
 // has plus the scalar oracle, every query mode (single, packets of 4/8/16, stream):
 //   3  axis-aligned rays (±0.0 components) on an integer heightfield, integer and
 //      half-integer positions: no miss, no NaN (watertight); double-fallback frequency
@@ -58,7 +58,7 @@ void for_each_config(const Mesh& mesh, const std::vector<Ray>& rays, const std::
         INFO(what, ": ", name(test), " ", name(isa), " ", name(mode));
         if (disagree_unfused != 0 && mode == Mode::single)
           MESSAGE(what, ": fused ", name(test), " ", name(isa), " hit/miss differs from the unfused scalar oracle in ",
-                  disagree_unfused, " of ", rays.size(), " rays (allowed, ACCURACY.md item 13)");
+                  disagree_unfused, " of ", rays.size(), " rays (allowed, docs/accuracy.md, stress item 13)");
         if (excused == test) {
           if (disagree != 0 && mode == Mode::single)
             MESSAGE(what, ": ", name(test), " ", name(isa), " hit/miss differs from ", group_name(group), " in ",

@@ -1,4 +1,4 @@
-// Numerical stress suite (ACCURACY.md, stress catalogue) — closed-mesh leaks.
+// Numerical stress suite (docs/accuracy.md, stress catalogue) — closed-mesh leaks.
 //
 // Items 1, 2, 8 and 13: closed indexed meshes (a subdivided grid cube and an integer-vertex
 // icosphere), rays from interior points aimed exactly at shared vertices, edge midpoints and
