@@ -2,8 +2,9 @@
 // Safe to include from baseline code: it names the tags and never instantiates a batch.
 #pragma once
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
-
 #include <xsimd/xsimd.hpp>
 
 #include "volley/options.h"
@@ -56,6 +57,27 @@ struct SingleRayArchT<Avx512> {
 };
 template <class Arch>
 using SingleRayArch = typename SingleRayArchT<Arch>::type;
+
+/// The one switch from a run-time ISA to a compile-time arch tag: f(Sse42{}), f(Avx2{}) or
+/// f(Avx512{}) for a resolved SIMD ISA (every f must return the same type). Throws
+/// std::invalid_argument for Isa::scalar and Isa::automatic (resolve the ISA first; the
+/// scalar oracle is no arch). Empty tags only: safe in baseline code.
+template <class F>
+decltype(auto) visit_arch(Isa isa, F&& f) {
+  switch (isa) {
+    case Isa::sse42:
+      return f(Sse42{});
+    case Isa::avx2:
+      return f(Avx2{});
+    case Isa::avx512:
+      return f(Avx512{});
+    case Isa::scalar:
+    case Isa::automatic:
+      break;
+  }
+  throw std::invalid_argument(std::string("visit_arch: ") + std::string(to_string(isa)) +
+                              " is not a SIMD ISA (resolve it first; scalar runs the oracle)");
+}
 
 }  // namespace volley::simd
 

@@ -88,17 +88,7 @@ std::unique_ptr<TriangleKernels> TriangleKernels::create(TriangleTest test, Isa 
     throw std::invalid_argument("TriangleKernels::create: resolve the ISA first (scalar runs the oracle)");
   if (!cpu_has(isa))
     throw std::invalid_argument("TriangleKernels::create: this CPU does not support " + std::string(to_string(isa)));
-  switch (isa) {
-    case Isa::sse42:
-      return make_for<Sse42>(test);
-    case Isa::avx2:
-      return make_for<Avx2>(test);
-    case Isa::avx512:
-      return make_for<Avx512>(test);
-    default:
-      break;
-  }
-  throw std::invalid_argument("TriangleKernels::create: unknown ISA");
+  return visit_arch(isa, [&]<class Arch>(Arch) { return make_for<Arch>(test); });
 }
 
 }  // namespace volley::simd

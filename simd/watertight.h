@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/kernel_constants.h"
 #include "simd/kernel_common.h"
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
@@ -34,11 +35,6 @@
 #include "simd/watertight_stats.h"
 
 namespace volley::simd::detail {
-
-/// Relative widening of the lower end of the scaled range prefilter: core::kScaledPad<float>
-/// (the oracle's; not included here, per-ISA files must not include src/core; tests/simd
-/// asserts equality).
-inline constexpr float kScaledPad = 2 * std::numeric_limits<float>::epsilon();
 
 /// Watertight test on kLanes<Arch> (ray, triangle) pairs. Reads WatertightBlock<kLanes<Arch>>.
 /// Zero-area triangles are made NaN lanes when the block is built (the oracle's first
@@ -58,7 +54,7 @@ struct WatertightTest {
     B okx, oky, okz;           // origin along kx, ky, kz (per lane when not uniform)
     IntB<Arch> ikx, iky, ikz;  // kx, ky, kz per lane (not uniform; AVX2, AVX-512)
     B tmin;
-    B tmin_lo;     // lower end of the prefilter, tmin - |tmin| kScaledPad (then times
+    B tmin_lo;     // lower end of the prefilter, tmin - |tmin| core::kScaledPad<float> (then times
                    // |det|); NaN where |sz| > 0 fails: an infinite dir[kz] (sz = 0)
                    // or a NaN one never hits
     B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
@@ -193,8 +189,8 @@ auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
   out.sy = B(r.s[1]);
   out.sz = B(r.s[2]);
   const float tmin = r.ray.tmin;
-  out.tmin_lo =
-      B(std::abs(r.s[2]) > 0.0f ? tmin - std::abs(tmin) * kScaledPad : std::numeric_limits<float>::quiet_NaN());
+  out.tmin_lo = B(std::abs(r.s[2]) > 0.0f ? tmin - std::abs(tmin) * core::kScaledPad<float>
+                                          : std::numeric_limits<float>::quiet_NaN());
   out.uniform = true;
   out.kx = r.k[0];
   out.ky = r.k[1];
@@ -268,8 +264,9 @@ auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays 
   out.sx = B::load_aligned(p.s[0] + offset);
   out.sy = B::load_aligned(p.s[1] + offset);
   out.sz = B::load_aligned(p.s[2] + offset);
-  out.tmin_lo = xsimd::select(xsimd::abs(out.sz) > B(0.0f), out.tmin - xsimd::abs(out.tmin) * B(kScaledPad),
-                              B(std::numeric_limits<float>::quiet_NaN()));
+  out.tmin_lo =
+      xsimd::select(xsimd::abs(out.sz) > B(0.0f), out.tmin - xsimd::abs(out.tmin) * B(core::kScaledPad<float>),
+                    B(std::numeric_limits<float>::quiet_NaN()));
   out.uniform = p.uniform != 0;
   if (out.uniform) {
     out.kx = p.uk[0];
@@ -410,7 +407,8 @@ bool WatertightTest<Arch>::test_vl(const Rays& r, const Tris& tri, B upper, Cand
   __mmask8 nz = _mm256_cmp_ps_mask(eu, zero, kNeqUnordered);
   nz = _mm256_mask_cmp_ps_mask(nz, ev, zero, kNeqUnordered);
   nz = _mm256_mask_cmp_ps_mask(nz, ew, zero, kNeqUnordered);
-  if (nz != 0xff) [[unlikely]] return false;
+  if (nz != 0xff) [[unlikely]]
+    return false;
   const __m256i signs = _mm256_castps_si256(_mm256_or_ps(_mm256_xor_ps(eu, ev), _mm256_xor_ps(eu, ew)));
   const __mmask8 inside = _mm256_cmpgt_epi32_mask(signs, _mm256_set1_epi32(-1));
   const B det = e.u + e.v + e.w;

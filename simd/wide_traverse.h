@@ -32,9 +32,7 @@
 #include <limits>
 #include <xsimd/xsimd.hpp>
 
-#include "core/bvh.h"
-#include "core/bvh_traverse.h"
-#include "core/triangle_watertight.h"
+#include "core/kernel_constants.h"
 #include "simd/arch.h"
 #include "simd/block_kernels.h"
 #include "simd/kernel_common.h"

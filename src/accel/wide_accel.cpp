@@ -71,17 +71,7 @@ std::unique_ptr<WideAccel> WideAccel::create(TriangleTest test, Isa isa, bool ro
     throw std::invalid_argument("WideAccel::create: resolve the ISA first (scalar runs the oracle)");
   if (!simd::cpu_has(isa))
     throw std::invalid_argument("WideAccel::create: this CPU does not support " + std::string(to_string(isa)));
-  switch (isa) {
-    case Isa::sse42:
-      return make_for<simd::Sse42>(test, robust);
-    case Isa::avx2:
-      return make_for<simd::Avx2>(test, robust);
-    case Isa::avx512:
-      return make_for<simd::Avx512>(test, robust);
-    default:
-      break;
-  }
-  throw std::invalid_argument("WideAccel::create: unknown ISA");
+  return simd::visit_arch(isa, [&]<class Arch>(Arch) { return make_for<Arch>(test, robust); });
 }
 
 }  // namespace volley::accel

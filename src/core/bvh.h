@@ -8,12 +8,9 @@
 #include <vector>
 
 #include "core/bbox.h"
+#include "core/kernel_constants.h"
 
 namespace volley::core {
-
-/// Deepest leaf build_bvh produces (root depth 0; every leaf depth < kBvhMaxDepth).
-/// A traversal stack of kBvhMaxDepth entries can therefore never overflow.
-inline constexpr int kBvhMaxDepth = 64;
 
 /// One BVH node. count == 0: interior node whose children are
 /// nodes[first_or_child] and nodes[first_or_child + 1] (always allocated as a pair);

@@ -8,18 +8,9 @@
 #include "core/bbox.h"
 #include "core/bvh.h"
 #include "core/geometry.h"
-#include "core/rounding.h"
+#include "core/kernel_constants.h"
 
 namespace volley::core {
-
-/// Factor applied to a box's exit distance so that the slab test is conservative:
-/// each slab distance (bound - org) * inv_dir carries three roundings (the difference,
-/// the reciprocal, the product), so entry and exit are each within gamma(3) of their
-/// exact values and padding the exit by 2 gamma(3) covers both (pbrt-v3
-/// Bounds3::IntersectP; Ize, "Robust BVH ray traversal", JCGT 2013). In float this is
-/// 1 + 3 ulp, about 1 + 3.6e-7.
-inline constexpr float kSlabExitPad = 1.0f + 2.0f * rounding_gamma(3);
-static_assert(kSlabExitPad > 1.0f, "the padding must not round away");
 
 /// A ray prepared for slab tests: origin, reciprocal direction (±inf for a ±0
 /// component) and the octant (sign bit of each reciprocal, so -0 counts as negative).

@@ -11,32 +11,10 @@
 #include <utility>
 
 #include "core/geometry.h"
+#include "core/kernel_constants.h"
 #include "core/triangle_moller.h"
 
 namespace volley::core {
-
-/// Relative widening of the lower end of the watertight test's scaled range prefilter (see
-/// below).
-template <class T>
-inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
-
-/// Factors {lo, hi} such that a ray hits a triangle with tmin <= t < upper whenever its
-/// det-scaled distance (t det, det's sign folded in) lies strictly between fl(lo |det|) and
-/// fl(hi |det|) and the edge and det tests pass: the division-free any-hit decision of the
-/// SIMD kernels (simd/watertight.h, sure_hit; the reasons are given there). Lanes outside
-/// (within ~16 ulps of either end, or not hit) are left to the quotient test.
-/// Always inlined: the single-ray walk (simd/wide_traverse.h) calls it from the per-ISA
-/// files, which must not emit a copy of their own.
-template <class T>
-[[gnu::always_inline]] constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
-  constexpr T kEps = std::numeric_limits<T>::epsilon(), kMin = std::numeric_limits<T>::min();
-  constexpr T kInf = std::numeric_limits<T>::infinity();
-  const T lo = tmin > 0 ? (tmin < kMin ? kMin : tmin) * (1 + 8 * kEps) : tmin <= 0 ? T(0) : kInf;
-  const T hi = upper >= kMin
-                   ? (upper < std::numeric_limits<T>::max() ? upper : std::numeric_limits<T>::max()) * (1 - 8 * kEps)
-                   : -kInf;
-  return {lo, hi};
-}
 
 /// Whether the watertight kernels of `isa` fuse (intersect_watertight's `Fused`): the same
 /// rule as moller_fused_for, FMA where the ISA has the instruction (AVX2, AVX-512). Only the
@@ -57,27 +35,6 @@ struct WoopRay {
   T sz;    ///< 1 / dir[kz]; 4 bytes
 };
 static_assert(sizeof(WoopRay<float>) == 24);
-
-/// The axes of make_woop_ray, tabulated. Entry c | n << 3 is for the comparisons
-/// c = (|d0| >= |d1|) | (|d0| >= |d2|) << 1 | (|d1| >= |d2|) << 2 and the signs
-/// n = (d0 < 0) | (d1 < 0) << 1 | (d2 < 0) << 2; it packs kx | ky << 2 | kz << 4. kz is
-/// where |d| is largest (ties: the lowest axis), kx and ky the next axes cyclically,
-/// swapped when looking down -z (which keeps the winding, so det's sign is the facing).
-/// A lookup, not branches: for incoherent rays each of those tests is a coin toss to the
-/// branch predictor (1.5 mispredictions per ray), and the single-ray walk
-/// (simd/wide_traverse.h) forms c and n with two vector compares.
-inline constexpr std::array<std::uint8_t, 64> kWoopAxes = [] {
-  std::array<std::uint8_t, 64> table{};
-  for (int i = 0; i < 64; ++i) {
-    const int c1 = i & 1, c2 = (i >> 1) & 1, c3 = (i >> 2) & 1;
-    // kz = |d0| >= |d1| ? (|d0| >= |d2| ? 0 : 2) : (|d1| >= |d2| ? 1 : 2)
-    const int kz = c1 ? (c2 ? 0 : 2) : (c3 ? 1 : 2);
-    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-    if ((i >> (3 + kz)) & 1) std::swap(kx, ky);
-    table[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(kx | ky << 2 | kz << 4);
-  }
-  return table;
-}();
 
 /// Computes the shear constants of a ray direction (paper, section 3), on the axes of
 /// kWoopAxes. A zero, infinite or NaN direction gives constants (NaN, Inf, sz = 0) with
@@ -111,8 +68,8 @@ WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
 /// (watertight_fused_for); each vertex is still sheared by itself, so nothing cracks.
 /// Pure function, thread safe.
 template <class T, bool Fused = false>
-bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>& p0,
-                          const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
+bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>& p0, const Vec3<T>& p1,
+                          const Vec3<T>& p2, TriHit<T>& hit) {
   // Zero-area triangle: no hit (as pbrt-v4). Its sheared vertices are collinear only up to
   // rounding, and a ray through the segment could see three same-signed residues.
   if (glm::cross(p1 - p0, p2 - p0) == Vec3<T>(0)) return false;
@@ -188,8 +145,7 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
 
 /// As above, computing the ray's shear constants on the fly.
 template <class T, bool Fused = false>
-bool intersect_watertight(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1,
-                          const Vec3<T>& p2, TriHit<T>& hit) {
+bool intersect_watertight(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
   return intersect_watertight<T, Fused>(ray, make_woop_ray(ray.dir), p0, p1, p2, hit);
 }
 

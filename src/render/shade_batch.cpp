@@ -10,6 +10,7 @@
 #include <cstdint>
 
 #include "render/shade_lanes.h"
+#include "simd/arch.h"
 
 namespace volley::render {
 namespace {
@@ -26,14 +27,9 @@ LaneKernels kernels_of(std::size_t lanes) {
 }
 
 LaneKernels kernels_for(Isa isa) {
-  switch (isa) {
-    case Isa::avx512:
-      return kernels_of<xsimd::avx512bw>(16);
-    case Isa::avx2:
-      return kernels_of<xsimd::fma3<xsimd::avx2>>(8);
-    default:
-      return kernels_of<xsimd::sse4_2>(4);  // the build's baseline ISA
-  }
+  // The scalar oracle shades on SSE4.2 lanes: the build's baseline ISA.
+  const Isa lanes_isa = isa == Isa::avx512 || isa == Isa::avx2 ? isa : Isa::sse42;
+  return simd::visit_arch(lanes_isa, []<class Arch>(Arch) { return kernels_of<Arch>(simd::kLanes<Arch>); });
 }
 
 constexpr std::size_t kRowAlign = 16;  // floats: 64 bytes, the widest lane count

@@ -7,9 +7,6 @@
 #include "core/triangle_watertight.h"
 #include "simd/watertight.h"
 
-// The kernels' prefilter widening is the oracle's (they may not include src/core).
-static_assert(volley::simd::detail::kScaledPad == volley::core::kScaledPad<float>);
-
 namespace {
 
 using namespace simd_test;
