@@ -55,13 +55,26 @@ inline constexpr int kWidePacket = 16;
 inline constexpr int kPacketSwitchLanes = 3;
 
 namespace detail {
+/// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
+enum class PacketWalk : std::uint32_t {
+  mixed_octants,  ///< the per-lane walk, each lane ordering children by its own octant
+  one_octant,     ///< the per-lane walk, one near-to-far order for the whole packet
+  frustum,        ///< one octant, one origin, no zero direction component: the frustum walk
+};
+
+/// What the single-ray entry learns of a ray before its walk (WideKernels::prepare_single).
+enum class RayScreen {
+  rejected,           ///< the oracle rejects it: a non-finite origin or direction, a NaN interval end
+  zero_component,     ///< some direction component is ±0: slab distances may be NaN (0 * inf)
+  no_zero_component,  ///< every component nonzero: the walk may combine slab distances as a tree
+};
+
 /// The lane setup of a packet, computed once by WideKernels::screen.
 template <int K>
 struct alignas(64) PacketSetup {
-  float inv[3][K];         // 12K bytes: 1 / dir per lane, as the oracle (±inf for ±0)
-  std::uint32_t valid;     //  4 bytes: the active lanes the oracle does not reject
-  std::uint32_t uniform;   //  4 bytes: 0 mixed octants; 1 one octant; 3 one octant, one
-                           //           origin, no zero direction component (frustum walk)
+  float inv[3][K];      // 12K bytes: 1 / dir per lane, as the oracle (±inf for ±0)
+  std::uint32_t valid;  //  4 bytes: the active lanes the oracle does not reject
+  PacketWalk walk;      //  4 bytes
 };
 }  // namespace detail
 
@@ -131,12 +144,11 @@ struct WideKernels {
  private:
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
   /// shear comes from the registers that hold the reciprocal direction (the call to
-  /// prepare_ray cost 4% of diffuse rays' time). Returns -1 for a ray the oracle rejects (a
-  /// non-finite origin or direction component, a NaN interval end), else whether no
-  /// direction component is ±0 (1) or some is (0), with `pr` complete and the reciprocal
-  /// direction in `inv`.
+  /// prepare_ray cost 4% of diffuse rays' time). Returns whether the oracle rejects the ray
+  /// (a non-finite origin or direction component, a NaN interval end), else whether some
+  /// direction component is ±0, with `pr` complete and the reciprocal direction in `inv`.
   template <bool AnyHit>
-  [[gnu::always_inline]] inline static int prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
+  [[gnu::always_inline]] inline static detail::RayScreen prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
   /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
   /// occluded_erased and trace_single.
   template <bool AnyHit>
@@ -331,11 +343,16 @@ bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray,
   if (start == wide_ref::kEmptyRef) return false;
   PreparedRay pr;
   __m128 inv;
-  const int no_zero = prepare_single<AnyHit>(ray, pr, inv);
-  if (no_zero > 0) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
-  return no_zero == 0 && walk<AnyHit, false>(bvh, pr, inv, start, hit);
+  switch (prepare_single<AnyHit>(ray, pr, inv)) {
+    case detail::RayScreen::no_zero_component:
+      return walk<AnyHit, true>(bvh, pr, inv, start, hit);
+    case detail::RayScreen::zero_component:
+      return walk<AnyHit, false>(bvh, pr, inv, start, hit);
+    case detail::RayScreen::rejected:
+      break;
+  }
+  return false;
 }
-
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool NoZero>
@@ -446,7 +463,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         k = _mm256_cmp_ps_mask(entry, exit, _CMP_LE_OQ);
         bits = k;
         refs = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
-        first_ref = static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
+        first_ref =
+            static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
       } else {
         bits = V8::le(entry, exit);
         if (bits) first_ref = node.child[std::countr_zero(bits)];
@@ -479,7 +497,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
             // reloaded from the stored distances.
             const __m128 d = _mm256_castps256_ps128(_mm256_maskz_compress_ps(k, entry));
             ci = first_ref;
-            cj = static_cast<std::uint32_t>(_mm_extract_epi32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs)), 1));
+            cj = static_cast<std::uint32_t>(
+                _mm_extract_epi32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs)), 1));
             di = _mm_cvtss_f32(d);
             dj = _mm_cvtss_f32(_mm_movehdup_ps(d));
           } else {
@@ -563,7 +582,7 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit>
-int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
+detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
   // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
   // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
   // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
@@ -571,14 +590,15 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
   const float* const f = reinterpret_cast<const float*>(&ray);  // org, tmin, dir, tmax
   const __m128 org_tmin = _mm_loadu_ps(f), dir = _mm_loadu_ps(f + 4);
   const __m128 zero = _mm_setzero_ps();
-  const __m128 ok_o = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero),
-                                   _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
+  const __m128 ok_o =
+      _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(org_tmin, org_tmin), zero), _mm_cmpord_ps(org_tmin, org_tmin), 0b1000);
   const __m128 ok_d = _mm_blend_ps(_mm_cmpeq_ps(_mm_sub_ps(dir, dir), zero), _mm_cmpord_ps(dir, dir), 0b1000);
-  if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return -1;
+  if (_mm_movemask_ps(_mm_and_ps(ok_o, ok_d)) != 0xf) return detail::RayScreen::rejected;
   // The oracle's make_box_ray: reciprocal direction, ±inf for a ±0 component (one division
   // for the three; lane 3 is 1 / tmax, unused).
   inv = _mm_div_ps(_mm_set1_ps(1.0f), dir);
-  const int no_zero = (_mm_movemask_ps(_mm_cmpeq_ps(dir, zero)) & 0x7) == 0;
+  const auto screened = (_mm_movemask_ps(_mm_cmpeq_ps(dir, zero)) & 0x7) == 0 ? detail::RayScreen::no_zero_component
+                                                                              : detail::RayScreen::zero_component;
   pr.ray = ray;
   if constexpr (Test != TriangleTest::watertight) {
     pr.k[0] = pr.k[1] = pr.k[2] = 0;  // (moller and plane need nothing more)
@@ -588,7 +608,7 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
     // and the signs of d, two compares. The quotients, each one IEEE division: d / d[kz] in
     // one divps, and 1 / d[kz] is inv's lane kz.
     const __m128 a = _mm_andnot_ps(_mm_set1_ps(-0.0f), dir);
-    const __m128 ge = _mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),  // |d0| |d0| |d1|
+    const __m128 ge = _mm_cmpge_ps(_mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 1, 0, 0)),   // |d0| |d0| |d1|
                                    _mm_shuffle_ps(a, a, _MM_SHUFFLE(3, 2, 2, 1)));  // |d1| |d2| |d2|
     const int c = _mm_movemask_ps(ge) & 7;
     const int n = _mm_movemask_ps(_mm_cmplt_ps(dir, zero)) & 7;
@@ -604,7 +624,7 @@ int WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay&
     const auto [lo, hi] = AnyHit ? core::sure_quotient_range(ray.tmin, ray.tmax) : std::pair{0.0f, 0.0f};
     pr.sure[0] = lo, pr.sure[1] = hi;  // (any hit only)
   }
-  return no_zero;
+  return screened;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -632,12 +652,17 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket
   screen(prep.rays, setup);
   if (setup.valid == 0) return;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  if (setup.uniform == 3)
-    trace_frustum<false>(bvh, prep, setup, hits);
-  else if (setup.uniform != 0)
-    trace_packet<false, true>(bvh, prep, setup, hits);
-  else
-    trace_packet<false, false>(bvh, prep, setup, hits);
+  switch (setup.walk) {
+    case detail::PacketWalk::frustum:
+      trace_frustum<false>(bvh, prep, setup, hits);
+      break;
+    case detail::PacketWalk::one_octant:
+      trace_packet<false, true>(bvh, prep, setup, hits);
+      break;
+    case detail::PacketWalk::mixed_octants:
+      trace_packet<false, false>(bvh, prep, setup, hits);
+      break;
+  }
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -650,9 +675,15 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
   HitPacket<K> unused;
-  if (setup.uniform == 3) return trace_frustum<true>(bvh, prep, setup, unused);
-  return setup.uniform != 0 ? trace_packet<true, true>(bvh, prep, setup, unused)
-                            : trace_packet<true, false>(bvh, prep, setup, unused);
+  switch (setup.walk) {
+    case detail::PacketWalk::frustum:
+      return trace_frustum<true>(bvh, prep, setup, unused);
+    case detail::PacketWalk::one_octant:
+      return trace_packet<true, true>(bvh, prep, setup, unused);
+    case detail::PacketWalk::mixed_octants:
+      break;
+  }
+  return trace_packet<true, false>(bvh, prep, setup, unused);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -701,12 +732,15 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   for (int c = 0; c < C; ++c) {
     const int o = c * L;
     const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
-    other_origin |= (detail::bits_from_mask<Arch>((ox != fx) | (oy != fy) | (oz != fz)) & (valid >> o) & kChunkBits) << o;
+    other_origin |= (detail::bits_from_mask<Arch>((ox != fx) | (oy != fy) | (oz != fz)) & (valid >> o) & kChunkBits)
+                    << o;
   }
   rays.active = valid;
   setup.valid = valid;
   const bool one_octant = (negx == 0 || negx == valid) && (negy == 0 || negy == valid) && (negz == 0 || negz == valid);
-  setup.uniform = one_octant ? (zeros == 0 && other_origin == 0 ? 3u : 1u) : 0u;
+  setup.walk = !one_octant                       ? detail::PacketWalk::mixed_octants
+               : zeros == 0 && other_origin == 0 ? detail::PacketWalk::frustum
+                                                 : detail::PacketWalk::one_octant;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -772,8 +806,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::leaf_occluded(PreparedPacket<K>& 
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, PreparedPacket<K>& prep,
-                                                             const detail::PacketSetup<K>& setup,
-                                                             HitPacket<K>& hits) {
+                                                             const detail::PacketSetup<K>& setup, HitPacket<K>& hits) {
   using V8 = detail::Lanes8<Arch>;
   using B = detail::FloatB<Arch>;
   constexpr int C = K / L;
@@ -938,8 +971,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
 template <class Arch, TriangleTest Test, bool Robust>
 template <bool AnyHit, bool Uniform>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, PreparedPacket<K>& prep,
-                                                            const detail::PacketSetup<K>& setup,
-                                                            HitPacket<K>& hits) {
+                                                            const detail::PacketSetup<K>& setup, HitPacket<K>& hits) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");

@@ -107,7 +107,8 @@ TEST_CASE("contract: subnormal direction components (1 / d overflows) give the o
     std::size_t hits = 0;
     for (const Hit& h : want) hits += h.hit();
     CHECK(hits > rays.size() / 100);  // hits and misses both
-    report(check_forms(soup.accel(test, Isa::scalar), rays, want, 43), std::string(volley::to_string(test)) + " scalar");
+    report(check_forms(soup.accel(test, Isa::scalar), rays, want, 43),
+           std::string(volley::to_string(test)) + " scalar");
     for (Isa isa : isas)
       report(check_forms(soup.accel(test, isa), rays, brute_force_all(soup, test, rays, isa), 47),
              std::string(volley::to_string(test)) + " " + std::string(volley::to_string(isa)));
@@ -118,7 +119,7 @@ namespace {
 
 /// screen()'s verdict for a pinhole packet of 16 lanes whose lane 0 is `first`.
 template <class Arch>
-std::uint32_t screened_uniform(const Ray& first) {
+volley::simd::detail::PacketWalk screened_walk(const Ray& first) {
   using Kernels = volley::simd::WideKernels<Arch, TriangleTest::watertight>;
   volley::RayPacket<16> p;
   std::vector<Ray> rays;
@@ -129,32 +130,33 @@ std::uint32_t screened_uniform(const Ray& first) {
   volley::simd::detail::PacketSetup<16> setup;
   Kernels::screen(p, setup);
   CHECK(setup.valid == (std::isnan(first.dir[1]) || std::isinf(first.org[0]) ? 0xfffeu : 0xffffu));
-  return setup.uniform;
+  return setup.walk;
 }
 
 }  // namespace
 
 TEST_CASE("contract: a rejected first lane does not take the frustum walk's common origin") {
-  // One origin for every valid lane: the frustum walk (uniform 3), whatever lane 0 holds
-  // when lane 0 is rejected; a valid lane 0 elsewhere makes the origins differ (1).
+  // One origin for every valid lane: the frustum walk, whatever lane 0 holds
+  // when lane 0 is rejected; a valid lane 0 elsewhere makes the origins differ (one octant).
   const Ray nan_dir = make_ray({7.0f, -3.0f, 0.5f}, {0.2f, kNaN, -1.0f});
   const Ray inf_org = make_ray({kInf, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   const Ray same = make_ray({1.0f, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   const Ray elsewhere = make_ray({1.5f, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   using namespace volley::simd;
+  constexpr auto kFrustum = detail::PacketWalk::frustum, kOneOctant = detail::PacketWalk::one_octant;
   if (cpu_has(Isa::sse42)) {
-    CHECK(screened_uniform<Sse42>(nan_dir) == 3u);
-    CHECK(screened_uniform<Sse42>(inf_org) == 3u);
-    CHECK(screened_uniform<Sse42>(same) == 3u);
-    CHECK(screened_uniform<Sse42>(elsewhere) == 1u);
+    CHECK(screened_walk<Sse42>(nan_dir) == kFrustum);
+    CHECK(screened_walk<Sse42>(inf_org) == kFrustum);
+    CHECK(screened_walk<Sse42>(same) == kFrustum);
+    CHECK(screened_walk<Sse42>(elsewhere) == kOneOctant);
   }
   if (cpu_has(Isa::avx2)) {
-    CHECK(screened_uniform<Avx2>(nan_dir) == 3u);
-    CHECK(screened_uniform<Avx2>(elsewhere) == 1u);
+    CHECK(screened_walk<Avx2>(nan_dir) == kFrustum);
+    CHECK(screened_walk<Avx2>(elsewhere) == kOneOctant);
   }
   if (cpu_has(Isa::avx512)) {
-    CHECK(screened_uniform<Avx512>(nan_dir) == 3u);
-    CHECK(screened_uniform<Avx512>(inf_org) == 3u);
-    CHECK(screened_uniform<Avx512>(elsewhere) == 1u);
+    CHECK(screened_walk<Avx512>(nan_dir) == kFrustum);
+    CHECK(screened_walk<Avx512>(inf_org) == kFrustum);
+    CHECK(screened_walk<Avx512>(elsewhere) == kOneOctant);
   }
 }
