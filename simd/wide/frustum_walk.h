@@ -1,0 +1,192 @@
+// The frustum walk of a coherent packet (one octant, one origin): one interval slab test
+// per node for the whole packet, the oracle's per-lane test at leaves.
+#pragma once
+#include <bit>
+#include <cstdint>
+#include <limits>
+
+#include "simd/wide/node_lanes.h"
+#include "simd/wide/stack.h"
+
+namespace volley::simd {
+
+// Frustum traversal of a coherent packet (the interval form of Reshetov et al., "Multi-level
+// ray tracing algorithm", SIGGRAPH 2005; Embree's coherent mode): the slab distances of all
+// lanes are bounded by interval arithmetic on [min, max] of origins and reciprocal
+// directions, so one 8-wide test per node answers "may any lane hit this child?".
+//
+// Conservative by monotonicity, with no padding of its own: for a lane, the oracle's slab
+// distance fl(fl(b - o) * inv) is monotone in o and, for fixed sign of b - o, in inv
+// (rounding to nearest is monotone), so over the packet's box of (o, inv) its extremes are
+// at corners: the near distance is at least min(fl(d * inv_min), fl(d * inv_max)) with
+// d = fl(b - o) for the origin bound that makes d smallest along the ray (inv > 0: o_max;
+// inv < 0: o_min), and the far distance at most the max of the products of the other
+// bound. Every valid lane has a finite, nonzero direction (screen()), but a subnormal
+// component has an infinite reciprocal, so a product 0 * inf (an origin bound on the plane)
+// can be NaN: min / max then take the other corner's product (0 for a zero difference), or
+// drop the axis at the entry / exit combination (tmin and far_hi are never NaN); the bounds
+// stay NaN-free (tests/accel: subnormal directions, against the oracle).
+// Inert children give ±inf products. A child passes when
+// max(near bounds, min tmin) <= min(far bounds, max tfar) * kSlabExitPad, which holds
+// whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
+// exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.
+template <class Arch, TriangleTest Test, bool Robust>
+template <bool AnyHit>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, PreparedPacket<K>& prep,
+                                                             const detail::PacketSetup<K>& setup, HitPacket<K>& hits) {
+  using V8 = detail::Lanes8<Arch>;
+  using B = detail::FloatB<Arch>;
+  constexpr int C = K / L;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const RayPacket<K>& rays = prep.rays;
+  const std::uint32_t valid = setup.valid;
+  const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
+  const B pinf(kInf), ninf(-kInf);
+
+  // Per-lane rays (for the leaf box tests) and the packet's intervals.
+  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+  B olo[3] = {pinf, pinf, pinf}, ohi[3] = {ninf, ninf, ninf}, ilo[3] = {pinf, pinf, pinf}, ihi[3] = {ninf, ninf, ninf};
+  B tmin_lo = pinf, tfar_hi = ninf;
+  for (int c = 0; c < C; ++c) {
+    const int o = c * L;
+    const auto ok = detail::mask_from_bits<Arch>((valid >> o) & kChunkBits);
+    ox[c] = B::load_aligned(rays.ox + o);
+    oy[c] = B::load_aligned(rays.oy + o);
+    oz[c] = B::load_aligned(rays.oz + o);
+    ix[c] = B::load_aligned(setup.inv[0] + o);
+    iy[c] = B::load_aligned(setup.inv[1] + o);
+    iz[c] = B::load_aligned(setup.inv[2] + o);
+    tmin[c] = B::load_aligned(rays.tmin + o);
+    B upper = B::load_aligned(rays.tmax + o);
+    if constexpr (!AnyHit) upper = detail::upper_bound<Arch>(B::load_aligned(hits.t + o), upper);
+    tfar[c] = xsimd::select(ok, upper, ninf);
+    const B* org[3] = {&ox[c], &oy[c], &oz[c]};
+    const B* inv[3] = {&ix[c], &iy[c], &iz[c]};
+    for (int a = 0; a < 3; ++a) {
+      olo[a] = xsimd::min(olo[a], xsimd::select(ok, *org[a], pinf));
+      ohi[a] = xsimd::max(ohi[a], xsimd::select(ok, *org[a], ninf));
+      ilo[a] = xsimd::min(ilo[a], xsimd::select(ok, *inv[a], pinf));
+      ihi[a] = xsimd::max(ihi[a], xsimd::select(ok, *inv[a], ninf));
+    }
+    tmin_lo = xsimd::min(tmin_lo, xsimd::select(ok, tmin[c], pinf));
+    tfar_hi = xsimd::max(tfar_hi, tfar[c]);
+  }
+  // Near plane of axis a: bounds[2a + neg]; its differences use the origin bound that
+  // makes them smallest along the ray (inv > 0: o_max, inv < 0: o_min), the far plane the other.
+  int np[3];
+  float o_near[3], o_far[3], i_lo[3], i_hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const float lo = detail::reduce_min<Arch>(olo[a]), hi = detail::reduce_max<Arch>(ohi[a]);
+    i_lo[a] = detail::reduce_min<Arch>(ilo[a]);
+    i_hi[a] = detail::reduce_max<Arch>(ihi[a]);
+    const bool neg = i_hi[a] < 0.0f;
+    np[a] = 2 * a + (neg ? 1 : 0);
+    o_near[a] = neg ? lo : hi;
+    o_far[a] = neg ? hi : lo;
+  }
+  const auto onx = V8::set1(o_near[0]), ony = V8::set1(o_near[1]), onz = V8::set1(o_near[2]);
+  const auto ofx = V8::set1(o_far[0]), ofy = V8::set1(o_far[1]), ofz = V8::set1(o_far[2]);
+  const auto ilx = V8::set1(i_lo[0]), ily = V8::set1(i_lo[1]), ilz = V8::set1(i_lo[2]);
+  const auto ihx = V8::set1(i_hi[0]), ihy = V8::set1(i_hi[1]), ihz = V8::set1(i_hi[2]);
+  const auto tmin8 = V8::set1(detail::reduce_min<Arch>(tmin_lo));
+  const auto pad8 = V8::set1(pad1);
+  float far_hi = detail::reduce_max<Arch>(tfar_hi);
+  const B padb(pad1);
+
+  detail::FrustumItem<Arch> stack[detail::kWideStack];
+  int size = 0;
+  std::uint32_t occluded = 0;
+  std::uint32_t cur = bvh.root;
+  std::uint32_t cur_lanes = valid;
+  for (;;) {
+    if (!(cur & wide_ref::kLeafBit)) {
+      // Interior: the interval slab test of all eight children.
+      const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
+      const auto dnx = V8::sub(V8::load(node.bounds[np[0]]), onx);
+      const auto dny = V8::sub(V8::load(node.bounds[np[1]]), ony);
+      const auto dnz = V8::sub(V8::load(node.bounds[np[2]]), onz);
+      const auto dfx = V8::sub(V8::load(node.bounds[np[0] ^ 1]), ofx);
+      const auto dfy = V8::sub(V8::load(node.bounds[np[1] ^ 1]), ofy);
+      const auto dfz = V8::sub(V8::load(node.bounds[np[2] ^ 1]), ofz);
+      const auto tnx = V8::min(V8::mul(dnx, ilx), V8::mul(dnx, ihx));
+      const auto tny = V8::min(V8::mul(dny, ily), V8::mul(dny, ihy));
+      const auto tnz = V8::min(V8::mul(dnz, ilz), V8::mul(dnz, ihz));
+      const auto tfx = V8::max(V8::mul(dfx, ilx), V8::mul(dfx, ihx));
+      const auto tfy = V8::max(V8::mul(dfy, ily), V8::mul(dfy, ihy));
+      const auto tfz = V8::max(V8::mul(dfz, ilz), V8::mul(dfz, ihz));
+      const auto entry = V8::max(V8::max(tnx, tny), V8::max(tnz, tmin8));
+      const auto exit = V8::mul(V8::min(V8::min(tfx, tfy), V8::min(tfz, V8::set1(far_hi))), pad8);
+      std::uint32_t bits = V8::le(entry, exit);
+      if (bits != 0) {
+        alignas(32) float dist[8];
+        V8::store(dist, entry);
+        // Push the hit children far to near (insertion by entry bound); the top is next.
+        const int base = size;
+        for (; bits != 0; bits &= bits - 1) {
+          const int j = std::countr_zero(bits);
+          const std::uint32_t child = node.child[j];
+          std::uint32_t lanes = valid & ~occluded;
+          if (child & wide_ref::kLeafBit) {
+            // A leaf: the oracle's box test per lane, against each lane's own tfar.
+            lanes = 0;
+            for (int c = 0; c < C; ++c) {
+              const B tnx_l = (B(node.bounds[np[0]][j]) - ox[c]) * ix[c];
+              const B tny_l = (B(node.bounds[np[1]][j]) - oy[c]) * iy[c];
+              const B tnz_l = (B(node.bounds[np[2]][j]) - oz[c]) * iz[c];
+              const B tfx_l = (B(node.bounds[np[0] ^ 1][j]) - ox[c]) * ix[c];
+              const B tfy_l = (B(node.bounds[np[1] ^ 1][j]) - oy[c]) * iy[c];
+              const B tfz_l = (B(node.bounds[np[2] ^ 1][j]) - oz[c]) * iz[c];
+              const B e = xsimd::max(tnz_l, xsimd::max(tny_l, xsimd::max(tnx_l, tmin[c])));
+              const B x = xsimd::min(tfz_l, xsimd::min(tfy_l, xsimd::min(tfx_l, tfar[c]))) * padb;
+              lanes |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
+            }
+            lanes &= valid & ~occluded;
+            if (lanes == 0) continue;
+          }
+          int k = size++;
+          for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
+          stack[k] = {child, dist[j], lanes};
+        }
+      }
+    } else {
+      // Leaf: the block kernels on the lanes that entered its box.
+      const std::uint32_t count = (cur >> wide_ref::kCountShift) & wide_ref::kCountMask;
+      const Block* blocks = bvh.blocks + (cur & wide_ref::kFirstMask);
+      const std::uint32_t lanes = cur_lanes & ~occluded;
+      if (count != 0 && lanes != 0) {
+        B hi = ninf;
+        if constexpr (AnyHit) {
+          const std::uint32_t now = leaf_occluded(prep, blocks, count, lanes);
+          if (now != 0) {
+            occluded |= now;
+            if (occluded == valid) return occluded;
+            for (int c = 0; c < C; ++c) {
+              tfar[c] = xsimd::select(detail::mask_from_bits<Arch>((now >> (c * L)) & kChunkBits), ninf, tfar[c]);
+              hi = xsimd::max(hi, tfar[c]);
+            }
+            far_hi = detail::reduce_max<Arch>(hi);
+          }
+        } else {
+          prep.rays.active = lanes;
+          leaf_intersect(prep, blocks, count, hits);
+          for (int c = 0; c < C; ++c) {
+            const B ht = B::load_aligned(hits.t + c * L);
+            tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
+            hi = xsimd::max(hi, tfar[c]);
+          }
+          far_hi = detail::reduce_max<Arch>(hi);
+        }
+      }
+    }
+    // Pop the next subtree some lane may still reach before its tfar.
+    for (;;) {
+      if (size == 0) return occluded;
+      --size;
+      if (stack[size].entry <= far_hi * pad1) break;
+    }
+    cur = stack[size].ref;
+    cur_lanes = stack[size].lanes;
+  }
+}
+
+}  // namespace volley::simd

@@ -1,0 +1,196 @@
+// The wide-BVH traversal kernels' interface: WideKernels<Arch, Test, Robust> (one ray,
+// packets of 16 rays; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
+// leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its
+// walks share. The bodies are in the files beside this one, one concept each:
+//   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8)
+//   stack.h         stack entries, the near-to-far sort, lane reductions
+//   single_walk.h   one ray: preparation, the walk, the erased entries
+//   packet_entry.h  packets: the entries, the lane screen, the shared leaf step
+//   frustum_walk.h  coherent packets: one interval test per node
+//   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
+// simd/wide_traverse.h includes them all and declares the per-ISA instantiations.
+//
+// Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
+// operation for operation: slab distances (plane - org) * (1 / dir) with near and far
+// plane picked by the octant of the ray (not by min/max), entry = max(near_x, near_y,
+// near_z, tmin), exit = min(far_x, far_y, far_z, tmax) * kSlabExitPad (Robust; no padding
+// for Robust = false), hit when entry <= exit. NaN-safe operand order: every max/min is maxps/minps(distance, running
+// bound), which returns its second operand when either is NaN, so a NaN slab distance
+// (0 * inf: an origin on a slab plane with a zero or subnormal direction component, whose
+// reciprocal is ±inf; or inf - inf in the fused form) leaves the running bound unchanged
+// and never culls, exactly as the oracle's `t_near > t_enter ? t_near : t_enter`. The
+// running bounds themselves are never NaN (NaN tmin / tmax rays are rejected first).
+// Inert children (lo = +inf, hi = -inf) fail for every ray.
+// One exception, the single-ray walk: its far distances are (plane - org) * fl(inv * pad),
+// the padding folded into the reciprocal once per ray (same rounding bound, one multiply
+// less per node), and with FMA (AVX2, AVX-512) and no zero direction component each slab
+// distance is one fused plane * inv - c, c = org * inv widened outwards once per ray (see
+// walk). Its slab distances may differ from the oracle's by a few ulps of org * inv, never
+// by culling a box the exact ray meets; the triangle answers are the same.
+#pragma once
+#include <immintrin.h>
+
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <xsimd/xsimd.hpp>
+
+#include "core/kernel_constants.h"
+#include "simd/arch.h"
+#include "simd/block_kernels.h"
+#include "simd/kernel_common.h"
+#include "simd/prepared_packet.h"
+#include "simd/prepared_ray.h"
+#include "simd/ray_packet.h"
+#include "simd/triangle_blocks.h"
+#include "simd/wide_bvh.h"
+#include "volley/options.h"
+#include "volley/ray.h"
+
+namespace volley::simd {
+
+/// Rays per packet of the packet traversal (RayPacket<16>); the API widens K = 4 and 8.
+inline constexpr int kWidePacket = 16;
+
+/// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
+/// lanes (or fewer) are still active in it (Embree's "switch threshold"). Measured on Sponza
+/// shadow and diffuse packets: 1 to 5 within noise of each other, 0 (never) and 8 slower.
+inline constexpr int kPacketSwitchLanes = 3;
+
+namespace detail {
+/// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
+enum class PacketWalk : std::uint32_t {
+  mixed_octants = 0,  ///< the per-lane walk, each lane ordering children by its own octant
+  one_octant = 1,     ///< the per-lane walk, one near-to-far order for the whole packet
+  frustum = 3,        ///< one octant, one origin, no zero direction component: the frustum walk
+};
+
+/// What the single-ray entry learns of a ray before its walk (WideKernels::prepare_single).
+enum class RayScreen : int {
+  rejected = -1,          ///< the oracle rejects it: a non-finite origin or direction, a NaN interval end
+  zero_component = 0,     ///< some direction component is ±0: slab distances may be NaN (0 * inf)
+  no_zero_component = 1,  ///< every component nonzero: the walk may combine slab distances as a tree
+};
+
+/// The lane setup of a packet, computed once by WideKernels::screen.
+template <int K>
+struct alignas(64) PacketSetup {
+  float inv[3][K];      // 12K bytes: 1 / dir per lane, as the oracle (±inf for ±0)
+  std::uint32_t valid;  //  4 bytes: the active lanes the oracle does not reject
+  PacketWalk walk;      //  4 bytes
+};
+}  // namespace detail
+
+/// What the kernels read of a built WideBvh: raw pointers (the owner keeps the storage).
+template <class Block>
+struct WideView {
+  const WideNode<kWideN>* nodes;  ///< 64-byte aligned
+  const Block* blocks;            ///< 64-byte aligned
+  std::uint32_t root;             ///< root reference (wide_ref)
+};
+
+/// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
+/// W = kLanes<SingleRayArch<Arch>> triangles (8 on AVX-512, whose packets still run 16
+/// lanes: single rays were faster on 8-triangle leaves, packets no slower). Robust = false
+/// drops the exit padding (kSlabExitPad) from the box test and the stack pruning
+/// (Options::robust = false, the fast path; the NaN-safe operand order stays, it costs
+/// nothing); its answers may differ from the oracle's where a ray grazes a box (the mutation
+/// test in tests/accel shows it). All functions are thread-safe (pure functions of their
+/// arguments).
+///
+/// Semantics, all forms: the answers of the scalar oracle's closest-hit / any-hit
+/// traversal with the same triangle test (same hit / miss; same prim, or the same t when
+/// two triangles tie). Rays with a non-finite origin or direction component, or a NaN
+/// tmin or tmax, hit nothing (as core::traverse_leaves). Visit order differs between the
+/// forms, and the oracle's watertight test compares t against the current bound in scaled
+/// form, so between two overlapping coplanar triangles whose t differ by an ulp or two the
+/// form that meets the farther one first may keep it (4 of 262144 primary rays on
+/// conference before its camera file; the oracle's own traversal does the same).
+template <class Arch, TriangleTest Test, bool Robust = true>
+struct WideKernels {
+  static constexpr int N = kWideN;
+  static constexpr int L = kLanes<Arch>;
+  static constexpr int K = kWidePacket;
+  /// The single-ray leaf kernels' arch; its lanes are the block width (8 on AVX-512).
+  using SingleArch = SingleRayArch<Arch>;
+  static constexpr int W = kLanes<SingleArch>;
+  using Block = BlockFor<Test, W>;
+  using View = WideView<Block>;
+
+  /// Closest hit of one ray: updates `hit` with every triangle hit at
+  /// ray.tmin <= t < min(hit.t, ray.tmax) that is nearer (as RayBlockKernels::intersect).
+  /// `bvh` is a const View*, type-erased so that the facade (accel::WideAccel) calls this
+  /// through a plain function pointer: one call per ray.
+  static void intersect_erased(const void* bvh, const Ray& ray, Hit& hit);
+  /// True when some triangle is hit with ray.tmin <= t < ray.tmax (`bvh` as above).
+  static bool occluded_erased(const void* bvh, const Ray& ray);
+
+  /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
+  /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
+  /// that find a nearer hit are written. Inactive lanes are never hit, but the leaf kernels
+  /// load and store whole chunks of lanes (unchanged values in lanes without a hit):
+  /// Accel hands a packet with inactive lanes over as a copy.
+  static void intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits);
+  /// The active lanes of `rays` that some triangle occludes (tmin <= t < tmax), as a mask.
+  static std::uint32_t occluded(const View& bvh, const RayPacket<K>& rays);
+
+  /// Single-ray traversal of the subtree `start` (the packet traversal's fallback).
+  template <bool AnyHit>
+  static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
+
+  /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
+  /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
+  /// fills `setup` (see PacketSetup). The frustum walk's common origin is that of the
+  /// first valid lane (a rejected lane's origin is no reference).
+  static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
+
+ private:
+  /// The start of every single-ray trace, prepare_ray's work done here: the watertight
+  /// shear comes from the registers that hold the reciprocal direction (the call to
+  /// prepare_ray cost 4% of diffuse rays' time). Returns whether the oracle rejects the ray
+  /// (a non-finite origin or direction component, a NaN interval end), else whether some
+  /// direction component is ±0, with `pr` complete and the reciprocal direction in `inv`.
+  template <bool AnyHit>
+  [[gnu::always_inline]] inline static detail::RayScreen prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
+  /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
+  /// occluded_erased and trace_single.
+  template <bool AnyHit>
+  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
+  /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
+  /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
+  /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
+  /// of single rays (Sponza and kitchen diffuse +1%, kitchen primary +2.5%).
+  template <bool AnyHit, bool NoZero>
+  [[gnu::always_inline]] inline static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv,
+                                                 std::uint32_t start, Hit& hit);
+
+  /// Bits of the first L lanes.
+  static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
+  /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
+  /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
+  /// zero direction component (screen() says so); taken only for packets whose lanes share
+  /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
+  /// hit points) the interval frustum grows loose and the per-lane walk was measured 2-3x
+  /// faster (Sponza, conference), while for one origin the frustum walk was 1.3-1.8x faster.
+  template <bool AnyHit>
+  static std::uint32_t trace_frustum(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
+                                     HitPacket<K>& hits);
+  /// Triangles used in a block: the lanes before its padding (prim = kInvalidPrim).
+  static int used_lanes(const Block& block);
+  /// A leaf for the active lanes of a packet: the block kernels, except that a last block at
+  /// most half full is tested triangle by triangle (padding lanes cost a full test each in
+  /// the block form). Same answers and order as PacketKernels::intersect / occluded.
+  static void leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
+                             HitPacket<K>& hits);
+  static std::uint32_t leaf_occluded(PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
+                                     std::uint32_t lanes);
+  /// The packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
+  template <bool AnyHit, bool Uniform>
+  static std::uint32_t trace_packet(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
+                                    HitPacket<K>& hits);
+};
+
+}  // namespace volley::simd
