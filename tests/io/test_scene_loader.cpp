@@ -208,6 +208,12 @@ TEST_CASE("scene: JSON syntax errors report line and column") {
 
   const auto huge = dir.write("huge.json", "{\n  \"render\": {\"width\": 1e400}\n}\n");
   CHECK(error_of(huge) == huge.string() + ":2:23: invalid JSON: number 1e400 is too large");
+
+  // Nested 10^5 deep: parsed and destroyed without recursion (no stack overflow), then
+  // rejected by what the key expects.
+  const std::string open(100000, '['), close(100000, ']');
+  const auto deep = dir.write("deep.json", "{\"objects\": " + open + close + "}");
+  CHECK(error_of(deep) == deep.string() + ": objects[0]: expected an object, found an array of 1");
 }
 
 TEST_CASE("scene: validation errors name the file and the JSON path") {
