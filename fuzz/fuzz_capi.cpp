@@ -281,9 +281,11 @@ bool plausible(const volley_ray& r, const volley_hit& h) {
       enter = std::max(enter, std::min(a, b) * (1 - 1e-12L * (std::min(a, b) > 0 ? 1 : -1)));
       leave = std::min(leave, std::max(a, b) * (1 + 1e-12L * (std::max(a, b) > 0 ? 1 : -1)));
     }
-    // The box is exact; the hit point carries the rounding of org + t dir's terms.
     const double p = static_cast<double>(r.org[k]) + static_cast<double>(h.t) * static_cast<double>(r.dir[k]);
-    const double slack = 1e-5 * (std::fabs(r.org[k]) + std::fabs(static_cast<double>(h.t) * r.dir[k])) + 1e-30;
+    // The box is exact; the hit point carries the rounding of org + t dir's terms (a few
+    // float ulps of them; a t off by more, as the plane test's far from the origin, places
+    // the point outside: a hit the exact ray does not have there).
+    const double slack = 0x1p-21 * (std::fabs(r.org[k]) + std::fabs(static_cast<double>(h.t) * r.dir[k])) + 1e-30;
     if (!(p >= lo - slack && p <= hi + slack)) return false;
   }
   return enter <= leave;
