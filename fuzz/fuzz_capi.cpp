@@ -7,16 +7,14 @@
 //
 // - Forms: every form agrees with the single-ray closest hit (the same prim, or a tie
 //   within 2 ulps of t: two overlapping coplanar triangles met in different orders,
-//   accel.h); occlusion equals hit or miss; inactive packet lanes stay untouched. For
-//   rays with tmin < 0 the forms are not compared: the box tests pad the exit distance by a
-//   factor, which tightens a negative one (core::intersect_box), so near t = 0 from below
-//   the walks are not conservative and the packet and single-ray walks, which round their
-//   slab distances differently, may disagree (found by this fuzzer; left for an issue).
-//   Nor where an answer is a triangle hit outside that triangle's box (plausible()), nor
-//   with robust = 0, whose unpadded box tests may cull a box the ray only grazes, nor for
-//   a direction component below 1 / FLT_MAX: its reciprocal overflows to inf, and a slab
-//   distance that is finite for the exact ray becomes infinite (the box is culled; found
-//   by this fuzzer, left for an issue).
+//   accel.h); occlusion equals hit or miss; inactive packet lanes stay untouched. They are
+//   compared where the walks promise to agree (comparable(), plausible()): tmin >= 0 (the
+//   exit pad is a factor, which tightens a negative exit distance), robust box tests (the
+//   unpadded ones may cull a box the ray grazes), no direction component below 1 / FLT_MAX
+//   (its reciprocal overflows to inf and a finite slab distance becomes infinite), and
+//   answers that are hits the exact ray can have (a float test can report a hit outside
+//   its triangle's box). The first and third are gaps this fuzzer found, left for an issue
+//   (docs/accuracy.md, rules 4 and 5).
 // - Sound: every reported triangle hit is the scalar oracle's answer for that triangle,
 //   bit for bit (t, u, v), in the oracle's variant for the ISA in use (core::
 //   intersect_triangle: Möller and watertight fuse on AVX2 / AVX-512), with tmin <= t < tmax.
