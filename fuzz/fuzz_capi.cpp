@@ -367,7 +367,8 @@ void check_against_oracle(const std::vector<volley_ray>& rays, const std::vector
         finding("a reported hit is not the oracle's answer for its triangle", i);
       }
     }
-    // Complete: no triangle hit well inside is missed.
+    // Complete: no triangle hit well inside is missed (for tmin >= 0: the first gap above).
+    if (!(r.tmin >= 0.0f)) continue;
     for (std::size_t tri = 0; tri < triangles; ++tri) {
       double t;
       if (!robust_hit(r, vertex(tri, 0), vertex(tri, 1), vertex(tri, 2), t)) continue;
