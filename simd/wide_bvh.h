@@ -59,6 +59,15 @@ template <int N>
 inline const WideNode<N>& node_at(const WideNode<N>* nodes, std::uint32_t ref) {
   return *reinterpret_cast<const WideNode<N>*>(reinterpret_cast<const char*>(nodes) + ref);
 }
+/// The reference of a leaf of `count` blocks from block `first` (count <= kMaxLeafBlocks,
+/// first < kMaxBlocks).
+constexpr std::uint32_t leaf(std::size_t first, std::uint32_t count) {
+  return kLeafBit | (count << kCountShift) | static_cast<std::uint32_t>(first);
+}
+/// The blocks a leaf reference holds.
+constexpr std::uint32_t leaf_count(std::uint32_t ref) { return (ref >> kCountShift) & kCountMask; }
+/// The index of a leaf reference's first block.
+constexpr std::uint32_t leaf_first(std::uint32_t ref) { return ref & kFirstMask; }
 }  // namespace wide_ref
 
 /// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,

@@ -1,11 +1,14 @@
 // The frustum walk of a coherent packet (one octant, one origin): one interval slab test
-// per node for the whole packet, the oracle's per-lane test at leaves.
+// per node for the whole packet, the oracle's per-lane test at leaves, whose triangles go
+// to the query (queries.h).
 #pragma once
 #include <bit>
 #include <cstdint>
 #include <limits>
 
 #include "simd/wide/node_lanes.h"
+#include "simd/wide/packet_lanes.h"
+#include "simd/wide/queries.h"
 #include "simd/wide/stack.h"
 
 namespace volley::simd {
@@ -31,9 +34,9 @@ namespace volley::simd {
 // whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
 // exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit>
+template <class Query>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, PreparedPacket<K>& prep,
-                                                             const detail::PacketSetup<K>& setup, HitPacket<K>& hits) {
+                                                             const detail::PacketSetup<K>& setup, Query& query) {
   using V8 = detail::Lanes8<Arch>;
   using B = detail::FloatB<Arch>;
   constexpr int C = K / L;
@@ -44,32 +47,20 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
   const B pinf(kInf), ninf(-kInf);
 
   // Per-lane rays (for the leaf box tests) and the packet's intervals.
-  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+  detail::PacketLanes<Arch, K> lanes(rays, setup, query);
   B olo[3] = {pinf, pinf, pinf}, ohi[3] = {ninf, ninf, ninf}, ilo[3] = {pinf, pinf, pinf}, ihi[3] = {ninf, ninf, ninf};
-  B tmin_lo = pinf, tfar_hi = ninf;
+  B tmin_lo = pinf;
   for (int c = 0; c < C; ++c) {
-    const int o = c * L;
-    const auto ok = detail::mask_from_bits<Arch>((valid >> o) & kChunkBits);
-    ox[c] = B::load_aligned(rays.ox + o);
-    oy[c] = B::load_aligned(rays.oy + o);
-    oz[c] = B::load_aligned(rays.oz + o);
-    ix[c] = B::load_aligned(setup.inv[0] + o);
-    iy[c] = B::load_aligned(setup.inv[1] + o);
-    iz[c] = B::load_aligned(setup.inv[2] + o);
-    tmin[c] = B::load_aligned(rays.tmin + o);
-    B upper = B::load_aligned(rays.tmax + o);
-    if constexpr (!AnyHit) upper = detail::upper_bound<Arch>(B::load_aligned(hits.t + o), upper);
-    tfar[c] = xsimd::select(ok, upper, ninf);
-    const B* org[3] = {&ox[c], &oy[c], &oz[c]};
-    const B* inv[3] = {&ix[c], &iy[c], &iz[c]};
+    const auto ok = detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits);
+    const B* org[3] = {&lanes.ox[c], &lanes.oy[c], &lanes.oz[c]};
+    const B* inv[3] = {&lanes.ix[c], &lanes.iy[c], &lanes.iz[c]};
     for (int a = 0; a < 3; ++a) {
       olo[a] = xsimd::min(olo[a], xsimd::select(ok, *org[a], pinf));
       ohi[a] = xsimd::max(ohi[a], xsimd::select(ok, *org[a], ninf));
       ilo[a] = xsimd::min(ilo[a], xsimd::select(ok, *inv[a], pinf));
       ihi[a] = xsimd::max(ihi[a], xsimd::select(ok, *inv[a], ninf));
     }
-    tmin_lo = xsimd::min(tmin_lo, xsimd::select(ok, tmin[c], pinf));
-    tfar_hi = xsimd::max(tfar_hi, tfar[c]);
+    tmin_lo = xsimd::min(tmin_lo, xsimd::select(ok, lanes.tmin[c], pinf));
   }
   // Near plane of axis a: bounds[2a + neg]; its differences use the origin bound that
   // makes them smallest along the ray (inv > 0: o_max, inv < 0: o_min), the far plane the other.
@@ -90,12 +81,12 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
   const auto ihx = V8::set1(i_hi[0]), ihy = V8::set1(i_hi[1]), ihz = V8::set1(i_hi[2]);
   const auto tmin8 = V8::set1(detail::reduce_min<Arch>(tmin_lo));
   const auto pad8 = V8::set1(pad1);
-  float far_hi = detail::reduce_max<Arch>(tfar_hi);
+  float far_hi = lanes.far_max();
   const B padb(pad1);
 
   detail::FrustumItem<Arch> stack[detail::kWideStack];
   int size = 0;
-  std::uint32_t occluded = 0;
+  std::uint32_t finished = 0;
   std::uint32_t cur = bvh.root;
   std::uint32_t cur_lanes = valid;
   for (;;) {
@@ -125,62 +116,37 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, Pr
         for (; bits != 0; bits &= bits - 1) {
           const int j = std::countr_zero(bits);
           const std::uint32_t child = node.child[j];
-          std::uint32_t lanes = valid & ~occluded;
+          std::uint32_t live = valid & ~finished;
           if (child & wide_ref::kLeafBit) {
             // A leaf: the oracle's box test per lane, against each lane's own tfar.
-            lanes = 0;
+            live = 0;
             for (int c = 0; c < C; ++c) {
-              const B tnx_l = (B(node.bounds[np[0]][j]) - ox[c]) * ix[c];
-              const B tny_l = (B(node.bounds[np[1]][j]) - oy[c]) * iy[c];
-              const B tnz_l = (B(node.bounds[np[2]][j]) - oz[c]) * iz[c];
-              const B tfx_l = (B(node.bounds[np[0] ^ 1][j]) - ox[c]) * ix[c];
-              const B tfy_l = (B(node.bounds[np[1] ^ 1][j]) - oy[c]) * iy[c];
-              const B tfz_l = (B(node.bounds[np[2] ^ 1][j]) - oz[c]) * iz[c];
-              const B e = xsimd::max(tnz_l, xsimd::max(tny_l, xsimd::max(tnx_l, tmin[c])));
-              const B x = xsimd::min(tfz_l, xsimd::min(tfy_l, xsimd::min(tfx_l, tfar[c]))) * padb;
-              lanes |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
+              B e, x;
+              lanes.slabs(node, j, np, c, padb, e, x);
+              live |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
             }
-            lanes &= valid & ~occluded;
-            if (lanes == 0) continue;
+            live &= valid & ~finished;
+            if (live == 0) continue;
           }
           int k = size++;
           for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
-          stack[k] = {child, dist[j], lanes};
+          stack[k] = {child, dist[j], live};
         }
       }
     } else {
-      // Leaf: the block kernels on the lanes that entered its box.
-      const std::uint32_t count = (cur >> wide_ref::kCountShift) & wide_ref::kCountMask;
-      const Block* blocks = bvh.blocks + (cur & wide_ref::kFirstMask);
-      const std::uint32_t lanes = cur_lanes & ~occluded;
-      if (count != 0 && lanes != 0) {
-        B hi = ninf;
-        if constexpr (AnyHit) {
-          const std::uint32_t now = leaf_occluded(prep, blocks, count, lanes);
-          if (now != 0) {
-            occluded |= now;
-            if (occluded == valid) return occluded;
-            for (int c = 0; c < C; ++c) {
-              tfar[c] = xsimd::select(detail::mask_from_bits<Arch>((now >> (c * L)) & kChunkBits), ninf, tfar[c]);
-              hi = xsimd::max(hi, tfar[c]);
-            }
-            far_hi = detail::reduce_max<Arch>(hi);
-          }
-        } else {
-          prep.rays.active = lanes;
-          leaf_intersect(prep, blocks, count, hits);
-          for (int c = 0; c < C; ++c) {
-            const B ht = B::load_aligned(hits.t + c * L);
-            tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
-            hi = xsimd::max(hi, tfar[c]);
-          }
-          far_hi = detail::reduce_max<Arch>(hi);
-        }
+      // Leaf: its blocks to the query, for the lanes that entered its box.
+      const std::uint32_t count = wide_ref::leaf_count(cur);
+      const std::uint32_t live = cur_lanes & ~finished;
+      if (count != 0 && live != 0) {
+        const detail::LanesStep step = query.leaf(prep, bvh.blocks + wide_ref::leaf_first(cur), count, live, lanes.tfar);
+        finished |= step.finished;
+        if (step.finished != 0 && finished == valid) return finished;
+        if (step.narrowed) far_hi = lanes.far_max();
       }
     }
     // Pop the next subtree some lane may still reach before its tfar.
     for (;;) {
-      if (size == 0) return occluded;
+      if (size == 0) return finished;
       --size;
       if (stack[size].entry <= far_hi * pad1) break;
     }

@@ -2,10 +2,12 @@
 // packets of 16 rays; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
 // leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its
 // walks share. The bodies are in the files beside this one, one concept each:
+//   queries.h       what is asked: each query's leaf action and termination rule
 //   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8)
 //   stack.h         stack entries, the near-to-far sort, lane reductions
+//   packet_lanes.h  a packet's lanes and the per-lane box test of one child
 //   single_walk.h   one ray: preparation, the walk, the erased entries
-//   packet_entry.h  packets: the entries, the lane screen, the shared leaf step
+//   packet_entry.h  packets: the entries and the lane screen that picks a walk
 //   frustum_walk.h  coherent packets: one interval test per node
 //   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
 // simd/wide_traverse.h includes them all and declares the per-ISA instantiations.
@@ -111,6 +113,8 @@ struct WideView {
 /// conference before its camera file; the oracle's own traversal does the same).
 template <class Arch, TriangleTest Test, bool Robust = true>
 struct WideKernels {
+  using Isa = Arch;
+  static constexpr TriangleTest kTest = Test;
   static constexpr int N = kWideN;
   static constexpr int L = kLanes<Arch>;
   static constexpr int K = kWidePacket;
@@ -137,9 +141,11 @@ struct WideKernels {
   /// The active lanes of `rays` that some triangle occludes (tmin <= t < tmax), as a mask.
   static std::uint32_t occluded(const View& bvh, const RayPacket<K>& rays);
 
-  /// Single-ray traversal of the subtree `start` (the packet traversal's fallback).
-  template <bool AnyHit>
-  static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
+  /// Single-ray traversal of the subtree `start` for `query` (queries.h: ClosestHitRay,
+  /// AnyHitRay): returns query.answer(). The packet walks' fallback, and the entry of every
+  /// single-ray query.
+  template <class Query>
+  static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Query& query);
 
   /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
   /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
@@ -152,20 +158,21 @@ struct WideKernels {
   /// shear comes from the registers that hold the reciprocal direction (the call to
   /// prepare_ray cost 4% of diffuse rays' time). Returns whether the oracle rejects the ray
   /// (a non-finite origin or direction component, a NaN interval end), else whether some
-  /// direction component is ±0, with `pr` complete and the reciprocal direction in `inv`.
-  template <bool AnyHit>
+  /// direction component is ±0, with `pr` complete (the sure quotient range when SureRange)
+  /// and the reciprocal direction in `inv`.
+  template <bool SureRange>
   [[gnu::always_inline]] inline static detail::RayScreen prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
-  /// Single-ray traversal of the subtree `start`, prepared here: intersect_erased,
-  /// occluded_erased and trace_single.
-  template <bool AnyHit>
-  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit);
+  /// trace_single, inlined into the erased entries.
+  template <class Query>
+  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start,
+                                                      Query& query);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
-  /// of single rays (Sponza and kitchen diffuse +1%, kitchen primary +2.5%).
-  template <bool AnyHit, bool NoZero>
-  [[gnu::always_inline]] inline static bool walk(const View& bvh, const PreparedRay& ray, __m128 inv,
-                                                 std::uint32_t start, Hit& hit);
+  /// of single rays.
+  template <class Query, bool NoZero>
+  [[gnu::always_inline]] inline static void walk(const View& bvh, const PreparedRay& ray, __m128 inv,
+                                                 std::uint32_t start, Query& query);
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
@@ -173,24 +180,16 @@ struct WideKernels {
   /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
   /// zero direction component (screen() says so); taken only for packets whose lanes share
   /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
-  /// hit points) the interval frustum grows loose and the per-lane walk was measured 2-3x
-  /// faster (Sponza, conference), while for one origin the frustum walk was 1.3-1.8x faster.
-  template <bool AnyHit>
+  /// hit points) the interval frustum grows loose and the per-lane walk is faster
+  /// (perf/traversal.md). Returns the lanes the query finished.
+  template <class Query>
   static std::uint32_t trace_frustum(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
-                                     HitPacket<K>& hits);
-  /// Triangles used in a block: the lanes before its padding (prim = kInvalidPrim).
-  static int used_lanes(const Block& block);
-  /// A leaf for the active lanes of a packet: the block kernels, except that a last block at
-  /// most half full is tested triangle by triangle (padding lanes cost a full test each in
-  /// the block form). Same answers and order as PacketKernels::intersect / occluded.
-  static void leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
-                             HitPacket<K>& hits);
-  static std::uint32_t leaf_occluded(PreparedPacket<K>& prep, const Block* blocks, std::uint32_t count,
-                                     std::uint32_t lanes);
-  /// The packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
-  template <bool AnyHit, bool Uniform>
+                                     Query& query);
+  /// The per-lane packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
+  /// Uniform: every valid lane in one octant. Returns the lanes the query finished.
+  template <class Query, bool Uniform>
   static std::uint32_t trace_packet(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
-                                    HitPacket<K>& hits);
+                                    Query& query);
 };
 
 }  // namespace volley::simd

@@ -1,11 +1,11 @@
-// Packets of 16 rays: the entries that screen a packet and pick its walk (frustum or
-// per lane), and the leaf step both packet walks share (the block kernels on the lanes a
-// leaf's box test kept).
+// Packets of 16 rays: the entries that screen a packet, prepare it for the triangle test
+// and hand it with its query (queries.h) to the walk its lanes allow (frustum or per lane).
 #pragma once
 #include <bit>
 #include <cstdint>
 
 #include "simd/wide/kernels.h"
+#include "simd/wide/queries.h"
 
 namespace volley::simd {
 
@@ -18,12 +18,13 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket
   screen(prep.rays, setup);
   if (setup.valid == 0) return;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
+  detail::ClosestHitPacket<WideKernels> query{hits};
   if (setup.walk == detail::PacketWalk::frustum)
-    trace_frustum<false>(bvh, prep, setup, hits);
+    trace_frustum(bvh, prep, setup, query);
   else if (setup.walk == detail::PacketWalk::one_octant)
-    trace_packet<false, true>(bvh, prep, setup, hits);
+    trace_packet<decltype(query), true>(bvh, prep, setup, query);
   else
-    trace_packet<false, false>(bvh, prep, setup, hits);
+    trace_packet<decltype(query), false>(bvh, prep, setup, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -35,10 +36,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
   screen(prep.rays, setup);
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  HitPacket<K> unused;
-  if (setup.walk == detail::PacketWalk::frustum) return trace_frustum<true>(bvh, prep, setup, unused);
-  return setup.walk == detail::PacketWalk::one_octant ? trace_packet<true, true>(bvh, prep, setup, unused)
-                                                      : trace_packet<true, false>(bvh, prep, setup, unused);
+  detail::AnyHitPacket<WideKernels> query;
+  if (setup.walk == detail::PacketWalk::frustum) return trace_frustum(bvh, prep, setup, query);
+  return setup.walk == detail::PacketWalk::one_octant ? trace_packet<decltype(query), true>(bvh, prep, setup, query)
+                                                      : trace_packet<decltype(query), false>(bvh, prep, setup, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -95,46 +96,6 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   const bool one_octant = (negx == 0 || negx == valid) && (negy == 0 || negy == valid) && (negz == 0 || negz == valid);
   setup.walk = one_octant ? (zeros == 0 && other_origin == 0 ? detail::PacketWalk::frustum : detail::PacketWalk::one_octant)
                           : detail::PacketWalk::mixed_octants;
-}
-
-template <class Arch, TriangleTest Test, bool Robust>
-int WideKernels<Arch, Test, Robust>::used_lanes(const Block& block) {
-  using I = detail::IntB<SingleArch>;
-  const I ids = I::load_aligned(reinterpret_cast<const std::int32_t*>(block.prim));
-  const auto used = xsimd::bool_cast(ids != I(static_cast<std::int32_t>(kInvalidPrim)));
-  return std::popcount(detail::bits_from_mask<SingleArch>(used));
-}
-
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::leaf_intersect(const PreparedPacket<K>& prep, const Block* blocks,
-                                                     std::uint32_t count, HitPacket<K>& hits) {
-  using LeafPacket = PacketKernels<Arch, Test, K, W>;
-  const Block& last = blocks[count - 1];
-  const int used = used_lanes(last);
-  if (used > W / 2) return LeafPacket::intersect(prep, blocks, count, hits);
-  if (count > 1) LeafPacket::intersect(prep, blocks, count - 1, hits);
-  for (int j = 0; j < used; ++j) LeafPacket::intersect_triangle(prep, last, j, hits);
-}
-
-template <class Arch, TriangleTest Test, bool Robust>
-std::uint32_t WideKernels<Arch, Test, Robust>::leaf_occluded(PreparedPacket<K>& prep, const Block* blocks,
-                                                             std::uint32_t count, std::uint32_t lanes) {
-  using LeafPacket = PacketKernels<Arch, Test, K, W>;
-  const Block& last = blocks[count - 1];
-  const int used = used_lanes(last);
-  if (used > W / 2) return LeafPacket::occluded(prep, blocks, count, lanes);
-  std::uint32_t hit = count > 1 ? LeafPacket::occluded(prep, blocks, count - 1, lanes) : 0u;
-  if (hit == lanes) return hit;
-  // Any hit within [tmin, tmax) of a lane: a closest-hit test against a fresh +inf bound.
-  HitPacket<K> scratch;
-  for (int i = 0; i < K; ++i) scratch.t[i] = std::numeric_limits<float>::infinity(), scratch.prim[i] = kInvalidPrim;
-  const std::uint32_t saved = prep.rays.active;
-  prep.rays.active = lanes & ~hit;
-  for (int j = 0; j < used; ++j) LeafPacket::intersect_triangle(prep, last, j, scratch);
-  prep.rays.active = saved;
-  for (int i = 0; i < K; ++i)
-    if (scratch.prim[i] != kInvalidPrim) hit |= 1u << i;
-  return hit & lanes;
 }
 
 }  // namespace volley::simd

@@ -1,11 +1,13 @@
 // The per-lane packet walk: each node tested per lane, subtrees with few active lanes
-// handed to the single-ray walk.
+// handed to the single-ray walk, leaves to the query (queries.h).
 #pragma once
 #include <bit>
 #include <cstdint>
 #include <limits>
 
 #include "simd/wide/node_lanes.h"
+#include "simd/wide/packet_lanes.h"
+#include "simd/wide/queries.h"
 #include "simd/wide/stack.h"
 
 namespace volley::simd {
@@ -17,9 +19,9 @@ namespace volley::simd {
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane.
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit, bool Uniform>
+template <class Query, bool Uniform>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, PreparedPacket<K>& prep,
-                                                            const detail::PacketSetup<K>& setup, HitPacket<K>& hits) {
+                                                            const detail::PacketSetup<K>& setup, Query& query) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
@@ -27,45 +29,31 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
   const RayPacket<K>& rays = prep.rays;
   const std::uint32_t valid = setup.valid;
   const float kNaN = std::numeric_limits<float>::quiet_NaN();
-  const B inf(std::numeric_limits<float>::infinity());
   const B pad(Robust ? core::kSlabExitPad : 1.0f);
 
-  // Per chunk: origin, reciprocal direction, octant masks, tmin and the current upper end
-  // tfar (closest hit: min(tmax, hit t); invalid or finished lanes: -inf).
-  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+  detail::PacketLanes<Arch, K> lanes(rays, setup, query);
+  B* const tfar = lanes.tfar;
+  // Uniform octant: the plane arrays of a valid lane's octant; otherwise each lane's octant.
+  const int lane0 = std::countr_zero(valid);
+  const int np[3] = {Uniform && setup.inv[0][lane0] < 0.0f ? 1 : 0, Uniform && setup.inv[1][lane0] < 0.0f ? 3 : 2,
+                     Uniform && setup.inv[2][lane0] < 0.0f ? 5 : 4};
   M negx[C], negy[C], negz[C];
   for (int c = 0; c < C; ++c) {
-    const int o = c * L;
-    ox[c] = B::load_aligned(rays.ox + o);
-    oy[c] = B::load_aligned(rays.oy + o);
-    oz[c] = B::load_aligned(rays.oz + o);
-    ix[c] = B::load_aligned(setup.inv[0] + o);
-    iy[c] = B::load_aligned(setup.inv[1] + o);
-    iz[c] = B::load_aligned(setup.inv[2] + o);
-    negx[c] = ix[c] < B(0.0f);
-    negy[c] = iy[c] < B(0.0f);
-    negz[c] = iz[c] < B(0.0f);
-    tmin[c] = B::load_aligned(rays.tmin + o);
-    const M ok = detail::mask_from_bits<Arch>((valid >> o) & kChunkBits);
-    B upper = B::load_aligned(rays.tmax + o);
-    if constexpr (!AnyHit) upper = detail::upper_bound<Arch>(B::load_aligned(hits.t + o), upper);
-    tfar[c] = xsimd::select(ok, upper, -inf);
+    negx[c] = lanes.ix[c] < B(0.0f);
+    negy[c] = lanes.iy[c] < B(0.0f);
+    negz[c] = lanes.iz[c] < B(0.0f);
   }
-  // Uniform octant: the plane arrays of a valid lane's octant.
-  const int lane0 = std::countr_zero(valid);
-  const int nx = Uniform && setup.inv[0][lane0] < 0.0f ? 1 : 0;
-  const int ny = Uniform && setup.inv[1][lane0] < 0.0f ? 3 : 2;
-  const int nz = Uniform && setup.inv[2][lane0] < 0.0f ? 5 : 4;
 
   alignas(64) float stack_dist[detail::kWideStack][K];
   std::uint32_t stack_ref[detail::kWideStack];
   int size = 0;
-  std::uint32_t occluded = 0;
+  std::uint32_t finished = 0;
 
   std::uint32_t cur = bvh.root;
   B cur_dist[C];
   for (int c = 0; c < C; ++c)
-    cur_dist[c] = xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), tmin[c], B(kNaN));
+    cur_dist[c] =
+        xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), lanes.tmin[c], B(kNaN));
 
   for (;;) {
     // Lanes active in `cur`: entry within the current upper end (NaN: not entered).
@@ -75,7 +63,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
       act[c] = cur_dist[c] <= tfar[c] * pad;
       bits |= detail::bits_from_mask<Arch>(act[c]) << (c * L);
     }
-    if constexpr (AnyHit) bits &= ~occluded;
+    bits &= ~finished;
     if (bits != 0 && std::popcount(bits) <= kPacketSwitchLanes) {
       // Few lanes left: the rest of this subtree one ray at a time.
       alignas(64) float far_lanes[K];
@@ -84,22 +72,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
         const int i = std::countr_zero(b);
         const Ray r{
             {rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmax[i]};
-        if constexpr (AnyHit) {
-          Hit unused;
-          if (trace_single<true>(bvh, r, cur, unused)) {
-            occluded |= 1u << i;
-            far_lanes[i] = -std::numeric_limits<float>::infinity();
-          }
-        } else {
-          Hit h{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
-          if (trace_single<false>(bvh, r, cur, h)) {
-            hits.t[i] = h.t, hits.u[i] = h.u, hits.v[i] = h.v, hits.prim[i] = h.prim;
-            far_lanes[i] = h.t;
-          }
-        }
+        if (query.single(bvh, r, cur, i, far_lanes[i])) finished |= 1u << i;
       }
       for (int c = 0; c < C; ++c) tfar[c] = B::load_aligned(far_lanes + c * L);
-      if (AnyHit && occluded == valid) return occluded;
+      if (finished == valid) return finished;
       bits = 0;
     }
     if (bits != 0) {
@@ -120,26 +96,22 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
               dist[c] = B(kNaN);
               continue;
             }
-            B tnx(0.0f), tny(0.0f), tnz(0.0f), tfx(0.0f), tfy(0.0f), tfz(0.0f);  // set below
+            B entry(0.0f), exit(0.0f);  // set below
             if constexpr (Uniform) {
-              tnx = (B(node.bounds[nx][j]) - ox[c]) * ix[c];
-              tny = (B(node.bounds[ny][j]) - oy[c]) * iy[c];
-              tnz = (B(node.bounds[nz][j]) - oz[c]) * iz[c];
-              tfx = (B(node.bounds[nx ^ 1][j]) - ox[c]) * ix[c];
-              tfy = (B(node.bounds[ny ^ 1][j]) - oy[c]) * iy[c];
-              tfz = (B(node.bounds[nz ^ 1][j]) - oz[c]) * iz[c];
+              lanes.slabs(node, j, np, c, pad, entry, exit);
             } else {
-              const B lx = (B(node.bounds[0][j]) - ox[c]) * ix[c], hx = (B(node.bounds[1][j]) - ox[c]) * ix[c];
-              const B ly = (B(node.bounds[2][j]) - oy[c]) * iy[c], hy = (B(node.bounds[3][j]) - oy[c]) * iy[c];
-              const B lz = (B(node.bounds[4][j]) - oz[c]) * iz[c], hz = (B(node.bounds[5][j]) - oz[c]) * iz[c];
-              tnx = xsimd::select(negx[c], hx, lx), tfx = xsimd::select(negx[c], lx, hx);
-              tny = xsimd::select(negy[c], hy, ly), tfy = xsimd::select(negy[c], ly, hy);
-              tnz = xsimd::select(negz[c], hz, lz), tfz = xsimd::select(negz[c], lz, hz);
+              const B ox = lanes.ox[c], oy = lanes.oy[c], oz = lanes.oz[c];
+              const B ix = lanes.ix[c], iy = lanes.iy[c], iz = lanes.iz[c];
+              const B lx = (B(node.bounds[0][j]) - ox) * ix, hx = (B(node.bounds[1][j]) - ox) * ix;
+              const B ly = (B(node.bounds[2][j]) - oy) * iy, hy = (B(node.bounds[3][j]) - oy) * iy;
+              const B lz = (B(node.bounds[4][j]) - oz) * iz, hz = (B(node.bounds[5][j]) - oz) * iz;
+              const B tnx = xsimd::select(negx[c], hx, lx), tfx = xsimd::select(negx[c], lx, hx);
+              const B tny = xsimd::select(negy[c], hy, ly), tfy = xsimd::select(negy[c], ly, hy);
+              const B tnz = xsimd::select(negz[c], hz, lz), tfz = xsimd::select(negz[c], lz, hz);
+              // NaN-safe order, as PacketLanes::slabs.
+              entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, lanes.tmin[c])));
+              exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
             }
-            // NaN-safe order: xsimd::max/min(distance, running) is maxps/minps with the
-            // running bound second.
-            const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
-            const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
             const M hit = act[c] & (entry <= exit);
             dist[c] = xsimd::select(hit, entry, B(kNaN));
             any = any || xsimd::any(hit);
@@ -171,31 +143,17 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, Pre
           continue;
         }
       } else {
-        // Leaf: the block kernels on the active lanes.
-        const std::uint32_t count = (cur >> wide_ref::kCountShift) & wide_ref::kCountMask;
-        const Block* blocks = bvh.blocks + (cur & wide_ref::kFirstMask);
+        // Leaf: its blocks to the query, for the active lanes.
+        const std::uint32_t count = wide_ref::leaf_count(cur);
         if (count != 0) {
-          if constexpr (AnyHit) {
-            const std::uint32_t now = leaf_occluded(prep, blocks, count, bits);
-            if (now != 0) {
-              occluded |= now;
-              if (occluded == valid) return occluded;
-              for (int c = 0; c < C; ++c)
-                tfar[c] = xsimd::select(detail::mask_from_bits<Arch>((now >> (c * L)) & kChunkBits), -inf, tfar[c]);
-            }
-          } else {
-            prep.rays.active = bits;
-            leaf_intersect(prep, blocks, count, hits);
-            for (int c = 0; c < C; ++c) {
-              const B ht = B::load_aligned(hits.t + c * L);
-              tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
-            }
-          }
+          const detail::LanesStep step = query.leaf(prep, bvh.blocks + wide_ref::leaf_first(cur), count, bits, tfar);
+          finished |= step.finished;
+          if (step.finished != 0 && finished == valid) return finished;
         }
       }
     }
     // Pop the next subtree.
-    if (size == 0) return occluded;
+    if (size == 0) return finished;
     --size;
     cur = stack_ref[size];
     for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[size] + c * L);

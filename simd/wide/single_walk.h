@@ -1,6 +1,7 @@
 // The single-ray walk of the wide BVH: the entry prepares the ray itself (screen,
 // reciprocal, the watertight shear), then an explicit stack, children sorted by entry
-// distance, leaves handed to the block kernels inlined into the walk.
+// distance when the query asks for it, leaves handed to the query (queries.h), whose
+// block kernels are inlined into the walk.
 #pragma once
 #include <immintrin.h>
 
@@ -10,34 +11,37 @@
 #include <cstring>
 
 #include "simd/wide/node_lanes.h"
+#include "simd/wide/queries.h"
 #include "simd/wide/stack.h"
 
 namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit>
-bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit) {
-  return trace_ray<AnyHit>(bvh, ray, start, hit);
+template <class Query>
+bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Ray& ray, std::uint32_t start,
+                                                   Query& query) {
+  return trace_ray(bvh, ray, start, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit>
-bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Hit& hit) {
-  if (start == wide_ref::kEmptyRef) return false;
+template <class Query>
+bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Query& query) {
+  if (start == wide_ref::kEmptyRef) return query.answer();
   PreparedRay pr;
   __m128 inv;
-  // (Written as two tests, not a switch: the entry's machine code stays as measured.)
-  const detail::RayScreen screened = prepare_single<AnyHit>(ray, pr, inv);
-  if (screened == detail::RayScreen::no_zero_component) return walk<AnyHit, true>(bvh, pr, inv, start, hit);
-  return screened == detail::RayScreen::zero_component && walk<AnyHit, false>(bvh, pr, inv, start, hit);
+  const detail::RayScreen screened = prepare_single<Query::kSureRange>(ray, pr, inv);
+  if (screened == detail::RayScreen::no_zero_component)
+    walk<Query, true>(bvh, pr, inv, start, query);
+  else if (screened == detail::RayScreen::zero_component)
+    walk<Query, false>(bvh, pr, inv, start, query);
+  return query.answer();
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit, bool NoZero>
-bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv, std::uint32_t start,
-                                           Hit& hit) {
+template <class Query, bool NoZero>
+void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv, std::uint32_t start,
+                                           Query& query) {
   using V8 = detail::Lanes8<Arch>;
-  using Leaf = RayBlockKernels<SingleArch, Test>;
   static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;
   // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
@@ -82,12 +86,11 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
     cfx = V8::template lane<0>(cf), cfy = V8::template lane<1>(cf), cfz = V8::template lane<2>(cf);
   }
 
-  // The upper end of the search (as RayBlockKernels: the nearer of hit.t and tmax).
-  float tmax = hit.t < ray.tmax ? hit.t : ray.tmax;
+  // The upper end of the search (closest hit, as RayBlockKernels: the nearer of hit.t and tmax).
+  float tmax = query.bound(ray);
   auto tmax8 = V8::set1(tmax * pad1);
   detail::WideStackItem<Arch> stack[detail::kWideStack];
   int size = 0;
-  bool found = false;
   std::uint32_t ref = start;
   const WideNode<N>* const nodes = bvh.nodes;  // not reloaded after each leaf call
   const Block* const all_blocks = bvh.blocks;
@@ -147,8 +150,8 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         bits = V8::le(entry, exit);
         if (bits) first_ref = node.child[std::countr_zero(bits)];
       }
-      if (AnyHit && bits != 0) {
-        // Any hit: no ordering and no distances (the stack entries are never pruned): the
+      if (!Query::kNearFirst && bits != 0) {
+        // Any order: no ordering and no distances (the stack entries are never pruned): the
         // first hit child next, the others on the stack.
         ref = first_ref;
         for (bits &= bits - 1; bits != 0; bits &= bits - 1) stack[size++].ref = node.child[std::countr_zero(bits)];
@@ -233,33 +236,27 @@ bool WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
         continue;
       }
     } else {
-      // Leaf: its blocks, closest hit (lowers tmax) or any hit (ends the walk).
-      const std::uint32_t count = (ref >> wide_ref::kCountShift) & wide_ref::kCountMask;
-      const Block* blocks = all_blocks + (ref & wide_ref::kFirstMask);
-      if constexpr (AnyHit) {
-        if (count != 0 && Leaf::occluded_inline(pr, blocks, count)) return true;
-      } else if (count != 0) {
-        Leaf::template intersect_inline<false>(pr, blocks, count, hit);
-        if (hit.t < tmax) {
-          tmax = hit.t;
-          tmax8 = V8::set1(tmax * pad1);
-          found = true;
-        }
+      // Leaf: its blocks to the query, which may lower tmax or end the walk.
+      const std::uint32_t count = wide_ref::leaf_count(ref);
+      if (count != 0) {
+        const detail::LeafStep step = query.leaf(pr, all_blocks + wide_ref::leaf_first(ref), count, tmax);
+        if (step == detail::LeafStep::done) return;
+        if (step == detail::LeafStep::narrowed) tmax8 = V8::set1(tmax * pad1);
       }
     }
     // Pop the next subtree that may still hold a hit nearer than tmax (padded as the
     // exit distance: its entry was computed with rounding).
     for (;;) {
-      if (size == 0) return found;
+      if (size == 0) return;
       --size;
-      if (AnyHit || stack[size].entry <= tmax * pad1) break;
+      if (!Query::kNearFirst || stack[size].entry <= tmax * pad1) break;
     }
     ref = stack[size].ref;
   }
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <bool AnyHit>
+template <bool SureRange>
 detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
   // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
   // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
@@ -299,8 +296,8 @@ detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray
     _mm_store_ps(r, inv);
     pr.k[0] = kx, pr.k[1] = ky, pr.k[2] = kz;
     pr.s[0] = q[kx], pr.s[1] = q[ky], pr.s[2] = r[kz];
-    const auto [lo, hi] = AnyHit ? core::sure_quotient_range(ray.tmin, ray.tmax) : std::pair{0.0f, 0.0f};
-    pr.sure[0] = lo, pr.sure[1] = hi;  // (any hit only)
+    const auto [lo, hi] = SureRange ? core::sure_quotient_range(ray.tmin, ray.tmax) : std::pair{0.0f, 0.0f};
+    pr.sure[0] = lo, pr.sure[1] = hi;
   }
   return screened;
 }
@@ -308,14 +305,15 @@ detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::intersect_erased(const void* bvh, const Ray& ray, Hit& hit) {
   const View& view = *static_cast<const View*>(bvh);
-  trace_ray<false>(view, ray, view.root, hit);
+  detail::ClosestHitRay<WideKernels> query{hit};
+  trace_ray(view, ray, view.root, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray& ray) {
   const View& view = *static_cast<const View*>(bvh);
-  Hit unused;
-  return trace_ray<true>(view, ray, view.root, unused);
+  detail::AnyHitRay<WideKernels> query;
+  return trace_ray(view, ray, view.root, query);
 }
 
 }  // namespace volley::simd

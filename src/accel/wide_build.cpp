@@ -315,8 +315,7 @@ class WideLayout {
       }
       const std::size_t blocks = leaf_blocks(kid);
       if (next_block + blocks > ref::kMaxBlocks) throw_too_many_blocks();
-      node.child[k] = ref::kLeafBit | (static_cast<std::uint32_t>(blocks) << ref::kCountShift) |
-                      static_cast<std::uint32_t>(next_block);
+      node.child[k] = ref::leaf(next_block, static_cast<std::uint32_t>(blocks));
       leaves.push_back({kids.id[k], static_cast<std::uint32_t>(next_block)});
       next_block += blocks;
       const double area = kid.box.half_area();

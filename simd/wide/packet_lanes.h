@@ -1,0 +1,70 @@
+// A packet's rays as the packet walks hold them, chunk by chunk of L lanes, and the
+// oracle's box test of one child for each lane: the per-lane test of the per-lane walk
+// (packet_walk.h) and of the frustum walk's leaves (frustum_walk.h).
+#pragma once
+#include <cstdint>
+#include <limits>
+
+#include "simd/wide/kernels.h"
+#include "simd/wide/stack.h"
+
+namespace volley::simd {
+
+namespace detail {
+
+template <class Arch, int K>
+struct PacketLanes {
+  using B = FloatB<Arch>;
+  static constexpr int L = kLanes<Arch>;
+  static constexpr int C = K / L;  // chunks of L lanes
+  static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
+
+  // Origin, reciprocal direction (the oracle's, ±inf for ±0), tmin and the current upper end
+  // tfar of every lane (invalid or finished lanes: -inf).
+  B ox[C], oy[C], oz[C], ix[C], iy[C], iz[C], tmin[C], tfar[C];
+
+  /// Loads the valid lanes of a screened packet; a lane's tfar is query.bound(tmax).
+  template <class Query>
+  [[gnu::always_inline]] PacketLanes(const RayPacket<K>& rays, const PacketSetup<K>& setup, const Query& query) {
+    const B ninf(-std::numeric_limits<float>::infinity());
+    for (int c = 0; c < C; ++c) {
+      const int o = c * L;
+      ox[c] = B::load_aligned(rays.ox + o);
+      oy[c] = B::load_aligned(rays.oy + o);
+      oz[c] = B::load_aligned(rays.oz + o);
+      ix[c] = B::load_aligned(setup.inv[0] + o);
+      iy[c] = B::load_aligned(setup.inv[1] + o);
+      iz[c] = B::load_aligned(setup.inv[2] + o);
+      tmin[c] = B::load_aligned(rays.tmin + o);
+      const auto ok = mask_from_bits<Arch>((setup.valid >> o) & kChunkBits);
+      tfar[c] = xsimd::select(ok, query.bound(o, B::load_aligned(rays.tmax + o)), ninf);
+    }
+  }
+
+  /// Entry and exit distances of chunk c into child j of `node`, one octant for the chunk
+  /// (near plane of axis a: node.bounds[np[a]], far: np[a] ^ 1). NaN-safe order:
+  /// xsimd::max/min(distance, running) is maxps/minps with the running bound second. The
+  /// child is hit where entry <= exit.
+  [[gnu::always_inline]] void slabs(const WideNode<kWideN>& node, int j, const int np[3], int c, B pad, B& entry,
+                                    B& exit) const {
+    const B tnx = (B(node.bounds[np[0]][j]) - ox[c]) * ix[c];
+    const B tny = (B(node.bounds[np[1]][j]) - oy[c]) * iy[c];
+    const B tnz = (B(node.bounds[np[2]][j]) - oz[c]) * iz[c];
+    const B tfx = (B(node.bounds[np[0] ^ 1][j]) - ox[c]) * ix[c];
+    const B tfy = (B(node.bounds[np[1] ^ 1][j]) - oy[c]) * iy[c];
+    const B tfz = (B(node.bounds[np[2] ^ 1][j]) - oz[c]) * iz[c];
+    entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
+    exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
+  }
+
+  /// The largest tfar of any lane.
+  float far_max() const {
+    B hi = tfar[0];
+    for (int c = 1; c < C; ++c) hi = xsimd::max(hi, tfar[c]);
+    return reduce_max<Arch>(hi);
+  }
+};
+
+}  // namespace detail
+
+}  // namespace volley::simd

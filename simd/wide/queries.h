@@ -1,0 +1,190 @@
+// The queries the walks answer. A query is a leaf action and a termination rule; the walks
+// (single_walk.h, frustum_walk.h, packet_walk.h) know nothing else of what is asked, so a
+// new query is a new struct here and an entry that hands it to a walk (docs/adding-a-query.md).
+//
+// A single-ray query Q (the walk in single_walk.h):
+//   Q::kNearFirst   true: children are visited nearest entry first, and a stacked subtree
+//                   whose entry lies beyond the current bound is dropped (closest hit);
+//                   false: any order, no distances, nothing dropped (any hit).
+//   Q::kSureRange   the prepared ray carries the sure quotient range of the watertight
+//                   any-hit decision (PreparedRay::sure).
+//   q.bound(ray)    the upper end of the search on entry.
+//   q.leaf(pr, blocks, count, bound)
+//                   the leaf's triangles: LeafStep::narrowed after lowering `bound`,
+//                   LeafStep::done to end the walk, LeafStep::go_on otherwise.
+//   q.answer()      what the walk returns.
+// A packet query P (the walks in frustum_walk.h and packet_walk.h), per lane:
+//   p.bound(o, tmax)                 the upper ends of lanes o .. o + L - 1 on entry.
+//   p.leaf(prep, blocks, count, lanes, tfar)
+//                   the leaf's triangles for `lanes`; lowers their tfar, and returns the
+//                   lanes that are finished (their tfar set to -inf) and whether any tfar fell.
+//   p.single(bvh, ray, start, lane, far)
+//                   the subtree `start` for one lane by the single walk (few lanes left);
+//                   updates the lane's upper end `far`, true when the lane is finished.
+#pragma once
+#include <bit>
+#include <cstdint>
+#include <limits>
+
+#include "simd/wide/kernels.h"
+
+namespace volley::simd {
+
+namespace detail {
+
+/// What a single-ray query's leaf action tells the walk.
+enum class LeafStep {
+  go_on,     ///< nothing changed
+  narrowed,  ///< the bound fell: the walk refreshes its copy for the node tests
+  done,      ///< the answer is known: the walk ends
+};
+
+/// What a packet query's leaf action tells the walk.
+struct LanesStep {
+  std::uint32_t finished;  ///< lanes whose answer is known (their tfar is now -inf)
+  bool narrowed;           ///< some lane's tfar fell
+};
+
+/// Triangles used in a block: the lanes before its padding (prim = kInvalidPrim).
+template <class Arch, class Block>
+int used_lanes(const Block& block) {
+  using I = IntB<Arch>;
+  const I ids = I::load_aligned(reinterpret_cast<const std::int32_t*>(block.prim));
+  const auto used = xsimd::bool_cast(ids != I(static_cast<std::int32_t>(kInvalidPrim)));
+  return std::popcount(bits_from_mask<Arch>(used));
+}
+
+/// Closest hit of one ray: every leaf lowers the bound to its nearest hit.
+template <class Kernels>
+struct ClosestHitRay {
+  using Leaf = RayBlockKernels<typename Kernels::SingleArch, Kernels::kTest>;
+  static constexpr bool kNearFirst = true;
+  static constexpr bool kSureRange = false;
+  Hit& hit;
+  bool found = false;
+
+  float bound(const Ray& ray) const { return hit.t < ray.tmax ? hit.t : ray.tmax; }
+  [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
+                                       std::uint32_t count, float& bound) {
+    Leaf::template intersect_inline<false>(pr, blocks, count, hit);
+    if (!(hit.t < bound)) return LeafStep::go_on;
+    bound = hit.t;
+    found = true;
+    return LeafStep::narrowed;
+  }
+  bool answer() const { return found; }
+};
+
+/// Any hit of one ray: the first leaf with a hit ends the walk.
+template <class Kernels>
+struct AnyHitRay {
+  using Leaf = RayBlockKernels<typename Kernels::SingleArch, Kernels::kTest>;
+  static constexpr bool kNearFirst = false;
+  static constexpr bool kSureRange = true;
+  bool occluded = false;
+
+  float bound(const Ray& ray) const { return ray.tmax; }
+  [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
+                                       std::uint32_t count, float&) {
+    if (!Leaf::occluded_inline(pr, blocks, count)) return LeafStep::go_on;
+    occluded = true;
+    return LeafStep::done;
+  }
+  bool answer() const { return occluded; }
+};
+
+/// Closest hits of a packet's lanes (hits.t on entry bounds each lane like tmax).
+template <class Kernels>
+struct ClosestHitPacket {
+  using Arch = typename Kernels::Isa;
+  using B = FloatB<Arch>;
+  using Packet = PacketKernels<Arch, Kernels::kTest, Kernels::K, Kernels::W>;
+  static constexpr int K = Kernels::K, L = Kernels::L;
+  HitPacket<K>& hits;
+
+  B bound(int o, B tmax) const { return upper_bound<Arch>(B::load_aligned(hits.t + o), tmax); }
+
+  /// The block kernels, except that a last block at most half full is tested triangle by
+  /// triangle (padding lanes cost a full test each in the block form). Same answers and
+  /// order as PacketKernels::intersect.
+  LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
+                 std::uint32_t lanes, B* tfar) {
+    prep.rays.active = lanes;
+    const auto& last = blocks[count - 1];
+    const int used = used_lanes<typename Kernels::SingleArch>(last);
+    if (used > Kernels::W / 2) {
+      Packet::intersect(prep, blocks, count, hits);
+    } else {
+      if (count > 1) Packet::intersect(prep, blocks, count - 1, hits);
+      for (int j = 0; j < used; ++j) Packet::intersect_triangle(prep, last, j, hits);
+    }
+    for (int c = 0; c < K / L; ++c) {
+      const B ht = B::load_aligned(hits.t + c * L);
+      tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
+    }
+    return {0, true};
+  }
+
+  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int i, float& far) {
+    Hit h{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
+    ClosestHitRay<Kernels> q{h};
+    if (Kernels::trace_single(bvh, ray, start, q)) {
+      hits.t[i] = h.t, hits.u[i] = h.u, hits.v[i] = h.v, hits.prim[i] = h.prim;
+      far = h.t;
+    }
+    return false;
+  }
+};
+
+/// Any hit of a packet's lanes: a lane is finished at its first hit.
+template <class Kernels>
+struct AnyHitPacket {
+  using Arch = typename Kernels::Isa;
+  using B = FloatB<Arch>;
+  using Packet = PacketKernels<Arch, Kernels::kTest, Kernels::K, Kernels::W>;
+  static constexpr int K = Kernels::K, L = Kernels::L;
+
+  B bound(int, B tmax) const { return tmax; }
+
+  /// As ClosestHitPacket::leaf, with PacketKernels::occluded.
+  LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
+                 std::uint32_t lanes, B* tfar) {
+    const std::uint32_t now = occluded(prep, blocks, count, lanes);
+    if (now == 0) return {0, false};
+    for (int c = 0; c < K / L; ++c)
+      tfar[c] = xsimd::select(mask_from_bits<Arch>((now >> (c * L)) & ((1u << L) - 1u)),
+                              B(-std::numeric_limits<float>::infinity()), tfar[c]);
+    return {now, true};
+  }
+
+  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int, float& far) {
+    AnyHitRay<Kernels> q;
+    if (!Kernels::trace_single(bvh, ray, start, q)) return false;
+    far = -std::numeric_limits<float>::infinity();
+    return true;
+  }
+
+ private:
+  static std::uint32_t occluded(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
+                                std::uint32_t lanes) {
+    const auto& last = blocks[count - 1];
+    const int used = used_lanes<typename Kernels::SingleArch>(last);
+    if (used > Kernels::W / 2) return Packet::occluded(prep, blocks, count, lanes);
+    std::uint32_t hit = count > 1 ? Packet::occluded(prep, blocks, count - 1, lanes) : 0u;
+    if (hit == lanes) return hit;
+    // Any hit within [tmin, tmax) of a lane: a closest-hit test against a fresh +inf bound.
+    HitPacket<K> scratch;
+    for (int i = 0; i < K; ++i) scratch.t[i] = std::numeric_limits<float>::infinity(), scratch.prim[i] = kInvalidPrim;
+    const std::uint32_t saved = prep.rays.active;
+    prep.rays.active = lanes & ~hit;
+    for (int j = 0; j < used; ++j) Packet::intersect_triangle(prep, last, j, scratch);
+    prep.rays.active = saved;
+    for (int i = 0; i < K; ++i)
+      if (scratch.prim[i] != kInvalidPrim) hit |= 1u << i;
+    return hit & lanes;
+  }
+};
+
+}  // namespace detail
+
+}  // namespace volley::simd
