@@ -24,6 +24,7 @@
 #include "simd/prepared_ray.h"
 #include "simd/ray_packet.h"
 #include "simd/triangle_blocks.h"
+#include "simd/triangle_test.h"
 #include "simd/watertight.h"
 #include "volley/options.h"
 #include "volley/ray.h"
@@ -45,45 +46,24 @@ template <class Arch>
 struct TestOfT<Arch, TriangleTest::watertight> {
   using type = WatertightTest<Arch>;
 };
-/// The vectorized test of `Test` on Arch.
+/// The vectorized test of `Test` on Arch (a TriangleTestLanes: triangle_test.h).
 template <class Arch, TriangleTest Test>
 using TestOf = typename TestOfT<Arch, Test>::type;
-
-/// Candidates of a division-free test (moller.h) carry t det, u det, v det with det's sign
-/// folded in and den = |det|; the quotients are taken only for hits. The other tests'
-/// candidates carry t, u, v.
-template <class Cand>
-concept DetScaled = requires(const Cand& c) {
-  c.den;
-};
-
-/// Tests whose candidates are a prefilter (watertight.h): the hits among the valid lanes
-/// are those T::confirm accepts on the quotient t.
-template <class T>
-concept QuotientDecides = T::kQuotientDecides;
-
-/// Tests whose hits are checked on the quotient t as well: T::confirm(r, c, t, upper) gives
-/// the valid lanes with tmin <= t < upper (Möller: on top of its scaled decision;
-/// watertight: the decision itself).
-template <class T>
-concept QuotientChecked = requires(const typename T::Rays& r, const typename T::Cand& c) {
-  T::confirm(r, c, c.t, c.t);
-};
 
 /// The valid lanes of `c` that hit, given their quotient t (cand_t) and the upper end.
 template <class T>
 [[gnu::always_inline]] inline auto confirmed(const typename T::Rays& r, const typename T::Cand& c,
                                              const decltype(c.t)& t, const decltype(c.t)& upper) {
-  if constexpr (QuotientChecked<T>)
+  if constexpr (T::kDecision != Decision::direct)
     return T::confirm(r, c, t, upper);
   else
     return c.valid;
 }
 
 /// t of the candidate lanes (a true division for a det-scaled test).
-template <class Cand>
-[[gnu::always_inline]] inline auto cand_t(const Cand& c) {
-  if constexpr (DetScaled<Cand>)
+template <class T>
+[[gnu::always_inline]] inline auto cand_t(const typename T::Cand& c) {
+  if constexpr (kDetScaled<T>)
     return c.t / c.den;
   else
     return c.t;
@@ -157,7 +137,8 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   static_assert(B::size == W, "kLanes<Arch> must be the float lane count");
-  constexpr bool kScaled = detail::DetScaled<typename T::Cand>;
+  static_assert(detail::TriangleTestLanes<T>, "a triangle test of one of the three kinds (triangle_test.h)");
+  constexpr bool kScaled = detail::kDetScaled<T>;
   const auto rays = T::broadcast(ray);
   float upper = hit.t < ray.ray.tmax ? hit.t : ray.ray.tmax;
   B upper_b(upper);
@@ -169,18 +150,7 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
     // Test all W triangles against the current upper end.
     typename T::Cand cand;
     std::uint32_t bits;
-    if constexpr (!EarlyExit && Test == TriangleTest::watertight && std::is_same_v<Arch, Avx512Ymm>) {
-      // The default configuration's leaf in the walk: the same test in AVX-512VL mask
-      // registers (single rays +1-3%); the generic code for the rare exact-zero blocks.
-      const auto tri = T::load_block(block, rays);
-      if (!T::test_vl(rays, tri, upper_b, cand, bits)) [[unlikely]] {
-        cand = T::template test<EarlyExit>(rays, tri, upper_b);
-        bits = detail::bits_from_mask<Arch>(cand.valid);
-      }
-    } else {
-      cand = T::template test<EarlyExit>(rays, T::load_block(block, rays), upper_b);
-      bits = detail::bits_from_mask<Arch>(cand.valid);
-    }
+    detail::BlockTest<Arch, T, EarlyExit>::run(rays, block, upper_b, cand, bits);
     if (bits == 0) continue;
     alignas(64) float ts[W], us[W], vs[W], dens[W];
     cand.t.store_aligned(ts);
@@ -189,7 +159,7 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
     if constexpr (kScaled) cand.den.store_aligned(dens);
     // Take hits in lane order, shrinking upper after each (the oracle's loop); a lane
     // hit against a larger upper may no longer be once an earlier lane shrank it.
-    if constexpr (detail::QuotientDecides<T>) {
+    if constexpr (T::kDecision == detail::Decision::quotient) {
       // Candidates only: each is divided and confirmed on its quotient in turn (the
       // divisions are independent, so they overlap).
       int win_lane = -1;
@@ -240,7 +210,7 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
   using B = detail::FloatB<Arch>;
   const auto rays = T::broadcast(ray);
   const B upper(ray.ray.tmax);
-  if constexpr (detail::QuotientDecides<T>) {
+  if constexpr (T::kDecision == detail::Decision::quotient) {
     // Any hit decides on det-scaled values: a lane surely in [tmin, tmax) ends the search
     // with no division; only lanes within a few ulps of either end (rare) are divided. The
     // sure range comes prepared with the ray (formed per call, it cost 8% at AVX-512).
@@ -265,7 +235,7 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     for (std::uint32_t b = 0; b < count; ++b) {
       const auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
       if (xsimd::none(cand.valid)) continue;
-      if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t(cand), upper))) return true;
+      if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper))) return true;
     }
     return false;
   }
@@ -283,7 +253,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
-  constexpr bool kScaled = detail::DetScaled<typename T::Cand>;
+  constexpr bool kScaled = detail::kDetScaled<T>;
   const RayPacket<K>& rays = prepared.rays;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
@@ -303,7 +273,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
       for (int j = 0; j < W; ++j) {
         const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
         if (xsimd::none(cand.valid)) continue;
-        const B t = detail::cand_t(cand);
+        const B t = detail::cand_t<T>(cand);
         const M hit = detail::confirmed<T>(r, cand, t, upper);
         upper = xsimd::select(hit, t, upper);
         hu = xsimd::select(hit, cand.u, hu);
@@ -342,13 +312,13 @@ void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K
                                   B(-std::numeric_limits<float>::infinity()));
     const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
     if (xsimd::none(cand.valid)) continue;
-    const B t = detail::cand_t(cand);
+    const B t = detail::cand_t<T>(cand);
     const M hit = detail::confirmed<T>(r, cand, t, upper);
-    if constexpr (detail::QuotientChecked<T>)
+    if constexpr (T::kDecision != detail::Decision::direct)
       if (xsimd::none(hit)) continue;
     xsimd::select(hit, t, ht).store_aligned(hits.t + c);
     B u = cand.u, v = cand.v;
-    if constexpr (detail::DetScaled<typename T::Cand>) u = u / cand.den, v = v / cand.den;
+    if constexpr (detail::kDetScaled<T>) u = u / cand.den, v = v / cand.den;
     xsimd::select(hit, u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
     xsimd::select(hit, v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
     xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
@@ -375,7 +345,7 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
     // Watertight: lanes surely in [tmin, tmax) hit with no division (see the single-ray
     // form); a triangle is divided only when it has other candidates.
     [[maybe_unused]] const auto sure = [&] {
-      if constexpr (detail::QuotientDecides<T>)
+      if constexpr (T::kDecision == detail::Decision::quotient)
         return T::sure_range(B::load_aligned(rays.tmin + c), upper);
       else
         return 0;
@@ -384,7 +354,7 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
     for (std::uint32_t b = 0; b < count; ++b) {
       const Block& block = blocks[b];
       for (int j = 0; j < W; ++j) {
-        if constexpr (detail::QuotientDecides<T>) {
+        if constexpr (T::kDecision == detail::Decision::quotient) {
           const auto d = T::depth(r, T::broadcast_tri(block, j, r));
           if (xsimd::none(d.inside)) continue;
           hit = hit | T::sure_hit(d, sure);
@@ -392,7 +362,7 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
           if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
         } else {
           const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-          if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t(cand), upper);
+          if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t<T>(cand), upper);
         }
       }
       if (xsimd::all(hit | ~act)) break;

@@ -15,6 +15,7 @@
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/triangle_blocks.h"
+#include "simd/triangle_test.h"
 
 namespace volley::simd::detail {
 
@@ -29,7 +30,8 @@ inline constexpr bool kMollerFused = kHasFma<Arch>;
 /// Möller–Trumbore on kLanes<Arch> (ray, triangle) pairs: one ray against a block, or
 /// one triangle against a packet's lanes. Reads MollerBlock<kLanes<Arch>>.
 template <class Arch>
-struct MollerTest {
+struct MollerTest : PlainRays<Arch> {
+  static constexpr Decision kDecision = Decision::scaled_checked;
   static constexpr int W = kLanes<Arch>;
   using Block = MollerBlock<W>;
   using B = FloatB<Arch>;
@@ -48,12 +50,6 @@ struct MollerTest {
     B t, u, v, den;
   };
 
-  [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
-  /// Nothing to precompute per lane: copies the rays.
-  template <int K>
-  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
-  template <int K>
-  [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
   /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
   template <int BW>
@@ -93,23 +89,6 @@ struct MollerTest {
     return mul_add(az, bz, mul_add(ay, by, ax * bx));
   }
 };
-
-template <class Arch>
-auto MollerTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
-  return broadcast_ray_lanes<Arch>(r.ray);
-}
-
-template <class Arch>
-template <int K>
-void MollerTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
-  out.rays = rays;
-}
-
-template <class Arch>
-template <int K>
-auto MollerTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
-  return load_ray_lanes<Arch, K>(p.rays, offset);
-}
 
 template <class Arch>
 auto MollerTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {

@@ -11,12 +11,14 @@
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/triangle_blocks.h"
+#include "simd/triangle_test.h"
 
 namespace volley::simd::detail {
 
 /// Plane test on kLanes<Arch> (ray, triangle) pairs. Reads PlaneBlock<kLanes<Arch>>.
 template <class Arch>
-struct PlaneTest {
+struct PlaneTest : PlainRays<Arch> {
+  static constexpr Decision kDecision = Decision::direct;
   static constexpr int W = kLanes<Arch>;
   using Block = PlaneBlock<W>;
   using B = FloatB<Arch>;
@@ -33,12 +35,6 @@ struct PlaneTest {
     B t, u, v;
   };
 
-  [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
-  /// Nothing to precompute per lane: copies the rays.
-  template <int K>
-  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
-  template <int K>
-  [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
   /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
   template <int BW>
@@ -51,23 +47,6 @@ struct PlaneTest {
   /// The lanes of `c` still hit when the upper end shrinks to `upper`.
   [[gnu::always_inline]] inline static M accept(const Cand& c, B upper);
 };
-
-template <class Arch>
-auto PlaneTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
-  return broadcast_ray_lanes<Arch>(r.ray);
-}
-
-template <class Arch>
-template <int K>
-void PlaneTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
-  out.rays = rays;
-}
-
-template <class Arch>
-template <int K>
-auto PlaneTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
-  return load_ray_lanes<Arch, K>(p.rays, offset);
-}
 
 template <class Arch>
 auto PlaneTest<Arch>::load_block(const Block& b, const Rays&) -> Tris {

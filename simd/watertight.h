@@ -32,6 +32,7 @@
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
 #include "simd/triangle_blocks.h"
+#include "simd/triangle_test.h"
 #include "simd/watertight_stats.h"
 
 namespace volley::simd::detail {
@@ -41,6 +42,8 @@ namespace volley::simd::detail {
 /// check), so the kernel never sees one.
 template <class Arch>
 struct WatertightTest {
+  /// The candidates' quotients decide (the kernel forms call confirm() on them).
+  static constexpr Decision kDecision = Decision::quotient;
   static constexpr int W = kLanes<Arch>;
   using Block = WatertightBlock<W>;
   using B = FloatB<Arch>;
@@ -78,8 +81,6 @@ struct WatertightTest {
   struct Edges {
     B u, v, w;
   };
-  /// The candidates' quotients decide (the kernel forms call confirm() on them).
-  static constexpr bool kQuotientDecides = true;
 
   [[gnu::always_inline]] inline static Rays broadcast(const PreparedRay& r);
   /// The oracle's make_woop_ray for every lane, and whether the active lanes share axes.
@@ -152,20 +153,13 @@ struct WatertightTest {
     else
       return e.u * az + e.v * bz + e.w * cz;
   }
-  /// test<false>() for one ray against an 8-wide block on AVX-512 (Avx512Ymm), written with
-  /// AVX-512VL intrinsics: compares into mask registers (the xsimd AVX2 code it stands for
-  /// uses VEX compares on ymm0-15 and vector masks). The same operations in the same order,
-  /// so the same lanes and values. Returns false, computing nothing, when some lane has an
-  /// edge function exactly 0 (test() redoes those in double).
-  [[gnu::always_inline]] inline static bool test_vl(const Rays& r, const Tris& tri, B upper, Cand& out,
-                                                    std::uint32_t& bits);
   /// The sheared x and y of the three vertices.
   struct Sheared {
     B ax, ay, bx, by, cx, cy;
   };
   /// Shears the vertices (so the ray runs along +z; the z scaling is deferred to the depth
   /// test) and returns their 2D edge functions at the origin, both products rounded: the
-  /// first steps of edges() and test_vl().
+  /// first steps of edges() and of the AVX-512VL block test (watertight_vl.h).
   [[gnu::always_inline]] inline static Edges edge_functions(const Rays& r, const Tris& tri, Sheared& s) {
     s = {shear(tri.akx, r.sx, tri.akz), shear(tri.aky, r.sy, tri.akz), shear(tri.bkx, r.sx, tri.bkz),
          shear(tri.bky, r.sy, tri.bkz), shear(tri.ckx, r.sx, tri.ckz), shear(tri.cky, r.sy, tri.ckz)};
@@ -234,33 +228,6 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
 }
 
 template <class Arch>
-bool WatertightTest<Arch>::test_vl(const Rays& r, const Tris& tri, B upper, Cand& out, std::uint32_t& bits) {
-  static_assert(W == 8 && kFused, "the AVX-512 8-lane leaf of the single-ray walk");
-  Sheared s;
-  const Edges e = edge_functions(r, tri, s);
-  const __m256 eu = e.u, ev = e.v, ew = e.w, zero = _mm256_setzero_ps();
-  constexpr int kNeqUnordered = 0x04, kLe = 0x12, kGe = 0x1d;
-  // all_nonzero(), same_sign_bit() and test()'s and_cmp chain, in mask registers.
-  __mmask8 nz = _mm256_cmp_ps_mask(eu, zero, kNeqUnordered);
-  nz = _mm256_mask_cmp_ps_mask(nz, ev, zero, kNeqUnordered);
-  nz = _mm256_mask_cmp_ps_mask(nz, ew, zero, kNeqUnordered);
-  if (nz != 0xff) [[unlikely]]
-    return false;
-  const __m256i signs = _mm256_castps_si256(_mm256_or_ps(_mm256_xor_ps(eu, ev), _mm256_xor_ps(eu, ew)));
-  const __mmask8 inside = _mm256_cmpgt_epi32_mask(signs, _mm256_set1_epi32(-1));
-  const B det = e.u + e.v + e.w;
-  const B ad = xsimd::abs(det);
-  __mmask8 valid = _mm256_mask_cmp_ps_mask(inside, ad, _mm256_set1_ps(std::numeric_limits<float>::max()), kLe);
-  const B ts = depth_sum(e, r.sz * tri.akz, r.sz * tri.bkz, r.sz * tri.ckz);
-  const B ts_s = ts ^ (det & B(-0.0f));
-  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, r.tmin_lo * ad, kGe);
-  valid = _mm256_mask_cmp_ps_mask(valid, ts_s, upper * ad, kLe);
-  bits = valid;
-  out.t = ts, out.u = e.v, out.v = e.w, out.den = det;
-  return true;
-}
-
-template <class Arch>
 auto WatertightTest<Arch>::sure_range(B tmin, B upper) -> SureRange {
   // Why these are sure (q = t det / |det| exactly, t = fl(q); rounding is monotonic):
   //  - upper end, hi = fl(min(upper, FLT_MAX) (1 - 8 eps)) for upper >= FLT_MIN (else
@@ -304,3 +271,4 @@ auto WatertightTest<Arch>::fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B 
 }  // namespace volley::simd::detail
 
 #include "simd/watertight_lanes.h"  // (the ray and triangle lanes: the rest of WatertightTest)
+#include "simd/watertight_vl.h"     // (its block test in AVX-512VL mask registers)
