@@ -1,0 +1,169 @@
+// A packet of rays against triangle blocks or one triangle of a block (the packet walks'
+// leaves and the standalone kernels), closest hit and any hit. Semantics as in
+// block_kernels.h.
+#pragma once
+#include <cstdint>
+#include <limits>
+
+#include "simd/kernel_forms.h"
+
+namespace volley::simd {
+
+/// A packet of K rays (K a multiple of kLanes<Arch>) against triangles in blocks of BW
+/// (the lane count, except on AVX-512, whose wide BVH stores blocks of 8: SingleRayArch).
+/// The packet is prepared once (prepare) and then reused for every call. Only lanes whose
+/// `active` bit is set are tested and written.
+template <class Arch, TriangleTest Test, int K, int BW = kLanes<Arch>>
+struct PacketKernels {
+  static constexpr int W = BW;
+  static constexpr int L = kLanes<Arch>;
+  static_assert(K % L == 0, "K rays per packet must be a multiple of the lane count");
+  using Block = BlockFor<Test, W>;
+
+  /// Per-lane precomputation of Test for `rays` (the Woop shear for watertight).
+  static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
+  /// Closest hit of every active lane over blocks[0 .. count) (semantics as in
+  /// RayBlockKernels::intersect, per lane).
+  static void intersect(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits);
+  /// Closest hit of every active lane against triangle j of `block` alone.
+  static void intersect_triangle(const PreparedPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
+  /// The lanes of `active` (ANDed with rays.rays.active) that some triangle of
+  /// blocks[0 .. count) occludes (tmin <= t < tmax). Stops as soon as all are occluded.
+  static std::uint32_t occluded(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count,
+                                std::uint32_t active);
+};
+
+// ---------------------------------------------------------------------------------------
+
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+  detail::TestOf<Arch, Test>::template prepare<K>(rays, out);
+}
+
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepared, const Block* blocks,
+                                                 std::uint32_t count, HitPacket<K>& hits) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
+  constexpr bool kScaled = detail::kDetScaled<T>;
+  const RayPacket<K>& rays = prepared.rays;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(prepared, c);
+    // Inactive lanes search [tmin, -inf): never hit.
+    B upper = xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
+                            B(-std::numeric_limits<float>::infinity()));
+    // u, v of each lane's winner (det-scaled tests: u det, v det and |det|, divided at the end).
+    B hu = B::load_aligned(hits.u + c), hv = B::load_aligned(hits.v + c), hden(1.0f);
+    B hp = detail::load_ids<Arch>(hits.prim + c);
+    M any_hit(false);
+    // Triangles in block order, each broadcast to all lanes; hits only shrink upper.
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const Block& block = blocks[b];
+      for (int j = 0; j < W; ++j) {
+        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+        if (xsimd::none(cand.valid)) continue;
+        const B t = detail::cand_t<T>(cand);
+        const M hit = detail::confirmed<T>(r, cand, t, upper);
+        upper = xsimd::select(hit, t, upper);
+        hu = xsimd::select(hit, cand.u, hu);
+        hv = xsimd::select(hit, cand.v, hv);
+        if constexpr (kScaled) hden = xsimd::select(hit, cand.den, hden);
+        hp = xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), hp);
+        any_hit = any_hit | hit;
+      }
+    }
+    if (xsimd::none(any_hit)) continue;
+    xsimd::select(any_hit, upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
+    if constexpr (kScaled) {
+      // Lanes without a hit keep their stored u, v (divided by 1: unchanged).
+      hu = hu / hden, hv = hv / hden;
+    }
+    hu.store_aligned(hits.u + c);
+    hv.store_aligned(hits.v + c);
+    hp.store_aligned(reinterpret_cast<float*>(hits.prim + c));
+  }
+}
+
+template <class Arch, TriangleTest Test, int K, int BW>
+void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K>& prepared, const Block& block, int j,
+                                                          HitPacket<K>& hits) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  const RayPacket<K>& rays = prepared.rays;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(prepared, c);
+    const B ht = B::load_aligned(hits.t + c);
+    const B upper = xsimd::select(act, detail::upper_bound(ht, B::load_aligned(rays.tmax + c)),
+                                  B(-std::numeric_limits<float>::infinity()));
+    const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+    if (xsimd::none(cand.valid)) continue;
+    const B t = detail::cand_t<T>(cand);
+    const M hit = detail::confirmed<T>(r, cand, t, upper);
+    if constexpr (T::kDecision != detail::Decision::direct)
+      if (xsimd::none(hit)) continue;
+    xsimd::select(hit, t, ht).store_aligned(hits.t + c);
+    B u = cand.u, v = cand.v;
+    if constexpr (detail::kDetScaled<T>) u = u / cand.den, v = v / cand.den;
+    xsimd::select(hit, u, B::load_aligned(hits.u + c)).store_aligned(hits.u + c);
+    xsimd::select(hit, v, B::load_aligned(hits.v + c)).store_aligned(hits.v + c);
+    xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), detail::load_ids<Arch>(hits.prim + c))
+        .store_aligned(reinterpret_cast<float*>(hits.prim + c));
+  }
+}
+
+template <class Arch, TriangleTest Test, int K, int BW>
+std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
+                                                         std::uint32_t count, std::uint32_t active) {
+  using T = detail::TestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  const RayPacket<K>& rays = prepared.rays;
+  std::uint32_t result = 0;
+  active &= rays.active;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(prepared, c);
+    const B upper = xsimd::select(act, B::load_aligned(rays.tmax + c), B(-std::numeric_limits<float>::infinity()));
+    M hit(false);
+    // Watertight: lanes surely in [tmin, tmax) hit with no division (see the single-ray
+    // form); a triangle is divided only when it has other candidates.
+    [[maybe_unused]] const auto sure = [&] {
+      if constexpr (T::kDecision == detail::Decision::quotient)
+        return T::sure_range(B::load_aligned(rays.tmin + c), upper);
+      else
+        return 0;
+    }();
+    // Any hit ends a lane; the chunk ends when every active lane has one.
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const Block& block = blocks[b];
+      for (int j = 0; j < W; ++j) {
+        if constexpr (T::kDecision == detail::Decision::quotient) {
+          const auto d = T::depth(r, T::broadcast_tri(block, j, r));
+          if (xsimd::none(d.inside)) continue;
+          hit = hit | T::sure_hit(d, sure);
+          const M rest = T::prefilter(r, d, upper) & ~hit;
+          if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
+        } else {
+          const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+          if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t<T>(cand), upper);
+        }
+      }
+      if (xsimd::all(hit | ~act)) break;
+    }
+    result |= detail::bits_from_mask<Arch>(hit & act) << c;
+  }
+  return result;
+}
+
+}  // namespace volley::simd

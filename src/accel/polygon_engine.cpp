@@ -1,0 +1,72 @@
+// Planar polygons as an engine: the even-odd crossing test (core/polygon.h) over their
+// own binary BVH, scalar (scenes hold few polygons).
+#include <memory>
+#include <vector>
+
+#include "accel/engine.h"
+#include "core/bvh_traverse.h"
+
+namespace volley::accel {
+namespace {
+
+class PolygonEngine final : public Engine {
+ public:
+  PolygonEngine(const std::vector<core::Polygon>& polygons, const std::vector<std::uint32_t>& ids, bool robust)
+      : polygons_(polygons), ids_(ids), robust_(robust) {
+    std::vector<core::BBox> boxes;
+    boxes.reserve(polygons.size());
+    for (const auto& poly : polygons) {
+      core::BBox b;
+      for (const auto& v : poly.vertices) b.extend(v);
+      boxes.push_back(b);
+    }
+    bvh_ = core::build_bvh(boxes, core::BvhBuildOptions{});
+  }
+
+  bool intersect(const Ray& ray, Hit& hit) const override {
+    core::RayT<float> r = to_core(ray);
+    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
+    return robust_ ? trace<false, true>(r, hit) : trace<false, false>(r, hit);
+  }
+  bool occluded(const Ray& ray) const override {
+    Hit unused;
+    const core::RayT<float> r = to_core(ray);
+    return robust_ ? trace<true, true>(r, unused) : trace<true, false>(r, unused);
+  }
+
+  void describe(AccelInfo& info) const override {
+    const core::BvhStats s = core::bvh_stats(bvh_);
+    info.nodes += s.nodes;
+    info.leaves += s.leaves;
+    info.depth = std::max(info.depth, s.depth);
+    info.bytes += s.bytes;
+  }
+
+ private:
+  template <bool AnyHit, bool Robust>
+  bool trace(const core::RayT<float>& r, Hit& hit) const {
+    return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
+      core::RayT<float> q = r;
+      q.tmax = tmax;
+      float t;
+      if (!core::intersect_polygon(q, polygons_[prim], t)) return false;
+      tmax = t;
+      hit = {t, 0.0f, 0.0f, ids_[prim]};
+      return true;
+    });
+  }
+
+  const std::vector<core::Polygon>& polygons_;  // Accel::Impl's (see Triangles)
+  const std::vector<std::uint32_t>& ids_;
+  bool robust_;
+  core::Bvh bvh_;
+};
+
+}  // namespace
+
+std::unique_ptr<Engine> make_polygon_engine(const std::vector<core::Polygon>& polygons,
+                                            const std::vector<std::uint32_t>& ids, bool robust) {
+  return std::make_unique<PolygonEngine>(polygons, ids, robust);
+}
+
+}  // namespace volley::accel

@@ -1,0 +1,62 @@
+// Accel's stream queries: runs of 16 rays traced as one packet where that pays (see
+// volley/accel.h), the rest one by one.
+#include <algorithm>
+#include <cmath>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+namespace {
+
+/// True when the directions of rays[0 .. n) share one octant (sign bits; -0 negative):
+/// the stream policy's test for tracing them as one packet below AVX-512.
+bool same_octant(const Ray* rays, std::size_t n) {
+  std::uint32_t all = 7, any = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t oct = (std::signbit(rays[i].dir[0]) ? 1u : 0u) | (std::signbit(rays[i].dir[1]) ? 2u : 0u) |
+                              (std::signbit(rays[i].dir[2]) ? 4u : 0u);
+    all &= oct;
+    any |= oct;
+  }
+  return all == any;
+}
+
+/// Whether rays[0 .. n) go as one packet: 16 of them, an engine that traces packets, and
+/// AVX-512 (packets of any octants pay there) or one octant.
+bool as_packet(const accel::TriangleEngine* engine, Isa isa, const Ray* rays, std::size_t n) {
+  return engine && engine->traces_packets() && n == 16 && (isa == Isa::avx512 || same_octant(rays, n));
+}
+
+}  // namespace
+
+void Accel::Impl::intersect(const Ray* rays, std::size_t count, Hit* hits) const {
+  for (std::size_t first = 0; first < count; first += 16) {
+    const std::size_t n = std::min<std::size_t>(16, count - first);
+    if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
+      RayPacket<16> p;
+      load(p, rays + first, 16);
+      HitPacket<16> h;
+      reset(h);
+      intersect(p, h);
+      store(h, hits + first, 16);
+    } else {
+      for (std::size_t i = first; i < first + n; ++i) hits[i] = intersect(rays[i]);
+    }
+  }
+}
+
+void Accel::Impl::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const {
+  for (std::size_t first = 0; first < count; first += 16) {
+    const std::size_t n = std::min<std::size_t>(16, count - first);
+    if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
+      RayPacket<16> p;
+      load(p, rays + first, 16);
+      const std::uint32_t mask = occluded(p);
+      for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
+    } else {
+      for (std::size_t i = first; i < first + n; ++i) blocked[i] = occluded(rays[i]) ? 1 : 0;
+    }
+  }
+}
+
+}  // namespace volley
