@@ -28,8 +28,8 @@ struct AlignedAllocator {
   }
   void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign); }
   /// resize() and the count constructor default-initialise: trivial elements (nodes, triangle
-  /// blocks) are left to their writer, which fills them in parallel (a serial zero fill of
-  /// the blocks was 2% of a one-thread build and 7% of a 16-thread one); types with a
+  /// blocks) are left to their writer, which fills them in parallel (a serial zero fill
+  /// showed in build profiles: perf/build.md); types with a
   /// constructor (BBox) still run it.
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {

@@ -125,7 +125,7 @@ auto MollerTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   const B u = un ^ sign, v = vn ^ sign, t = tn ^ sign;
   // det finite and nonzero (parallel ray, degenerate triangle, padding and NaN fail);
   // every comparison is false for NaN. Without mask registers the test reuses den
-  // (finite_nonzero would take abs(det) again: +2% instructions on AVX2).
+  // (finite_nonzero would take abs(det) again).
   M valid;
   if constexpr (kHasMaskRegisters<Arch>)
     valid = finite_nonzero<Arch>(det);

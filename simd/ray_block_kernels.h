@@ -19,13 +19,12 @@ struct RayBlockKernels {
   /// hit with tmin <= t < min(hit.t, ray.tmax); leaves it untouched otherwise.
   static void intersect(const PreparedRay& ray, const Block* blocks, std::uint32_t count, Hit& hit);
   /// The same, inlined into the caller: the single-ray walk of the wide BVH
-  /// (wide_traverse.h), which saves the call, the stack realignment and the ray's
-  /// broadcasts at every leaf (AVX-512: diffuse +0.5-3%, shadow rays +0-2%).
+  /// (simd/wide/single_walk.h), which saves the call, the stack realignment and the ray's
+  /// broadcasts at every leaf.
   /// EarlyExit = false runs each block's test to the end instead of leaving it once no lane
-  /// passes the edge tests: the walk's choice. A leaf the walk reaches holds triangles near
-  /// the ray, so that branch goes either way and mispredicts; without it diffuse rays ran
-  /// 1-4% faster (AVX2 2-5%). With random blocks, as in the kernel benchmarks, the exit
-  /// wins by 4-20%, so the standalone forms keep it.
+  /// passes the edge tests: the walk's choice, since a leaf the walk reaches holds triangles
+  /// near the ray and that branch mispredicts; with random blocks, as in the kernel
+  /// benchmarks, the exit wins, so the standalone forms keep it (perf/traversal.md).
   template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static void intersect_inline(const PreparedRay& ray, const Block* blocks,
                                                              std::uint32_t count, Hit& hit);
@@ -127,7 +126,7 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
   if constexpr (T::kDecision == detail::Decision::quotient) {
     // Any hit decides on det-scaled values: a lane surely in [tmin, tmax) ends the search
     // with no division; only lanes within a few ulps of either end (rare) are divided. The
-    // sure range comes prepared with the ray (formed per call, it cost 8% at AVX-512).
+    // sure range comes prepared with the ray (formed per call it was measurably slower).
     const auto sure = T::sure_range(ray);
     for (std::uint32_t b = 0; b < count; ++b) {
       const auto d = T::depth(rays, T::load_block(blocks[b], rays));

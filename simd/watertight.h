@@ -108,8 +108,8 @@ struct WatertightTest {
     B ts, ts_s, det, ad, u, v;
   };
   /// test()'s steps up to t det, for the any-hit forms. Both share edges(); the rest is
-  /// written out twice on purpose: with test() built on depth(), the closest-hit forms ran
-  /// 4-9% more instructions (AVX2, callgrind).
+  /// written out twice on purpose: test() built on depth() ran more instructions
+  /// (perf/traversal.md).
   [[gnu::always_inline]] inline static Depth depth(const Rays& r, const Tris& tri);
   /// test()'s prefilter on the inside lanes of `d`.
   [[gnu::always_inline]] inline static M prefilter(const Rays& r, const Depth& d, B upper) {

@@ -32,7 +32,7 @@ static_assert(sizeof(WideNode<4>) == 128, "WideNode<4>: 96 B boxes + 16 B refs +
 /// Child references, 32 bits:
 ///   interior: bit 31 clear, bits 0..30 = the node's byte offset in the node array (index
 ///             times sizeof(WideNode<N>)), so the walk adds it to the array's address
-///             without a shift (+0.5-1.5% single rays: the shift sat on the longest chain);
+///             without a shift (the shift sat on the walk's longest chain);
 ///   leaf:     bit 31 set, bits 27..30 = block count (0..15), bits 0..26 = first block.
 /// A leaf of 0 blocks is the empty reference (kEmptyRef).
 namespace wide_ref {

@@ -58,8 +58,8 @@ namespace volley::simd {
 inline constexpr int kWidePacket = 16;
 
 /// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
-/// lanes (or fewer) are still active in it (Embree's "switch threshold"). Measured on Sponza
-/// shadow and diffuse packets: 1 to 5 within noise of each other, 0 (never) and 8 slower.
+/// lanes (or fewer) are still active in it (Embree's "switch threshold"; the value:
+/// perf/traversal.md).
 inline constexpr int kPacketSwitchLanes = 3;
 
 namespace detail {
@@ -155,8 +155,8 @@ struct WideKernels {
 
  private:
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
-  /// shear comes from the registers that hold the reciprocal direction (the call to
-  /// prepare_ray cost 4% of diffuse rays' time). Returns whether the oracle rejects the ray
+  /// shear comes from the registers that hold the reciprocal direction (a call to
+  /// prepare_ray showed in profiles of diffuse rays). Returns whether the oracle rejects the ray
   /// (a non-finite origin or direction component, a NaN interval end), else whether some
   /// direction component is ±0, with `pr` complete (the sure quotient range when SureRange)
   /// and the reciprocal direction in `inv`.
@@ -168,8 +168,8 @@ struct WideKernels {
                                                       Query& query);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
-  /// Inlined into its callers: the call, its frame and the vzeroupper before it cost 1-2.5%
-  /// of single rays.
+  /// Inlined into its callers: the call, its frame and the vzeroupper before it cost single
+  /// rays measurable time (perf/traversal.md).
   template <class Query, bool NoZero>
   [[gnu::always_inline]] inline static void walk(const View& bvh, const PreparedRay& ray, __m128 inv,
                                                  std::uint32_t start, Query& query);

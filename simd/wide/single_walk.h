@@ -134,8 +134,7 @@ void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
       // The hit children as bits, and the first one's reference. AVX-512 compares into a
       // mask register and takes the reference out of the node's reference vector with one
       // vpcompressd, so the next node's address does not wait for movemask, bit scan and a
-      // load indexed by it, the longest chain of the walk (AVX-512, against that: shadow
-      // rays +4-7%, primary +8%, diffuse +0-4%).
+      // load indexed by it, the longest chain of the walk (perf/traversal.md).
       std::uint32_t bits;
       std::uint32_t first_ref = 0;
       [[maybe_unused]] __mmask8 k = 0;  // AVX-512: the hit mask and the node's references
@@ -192,12 +191,11 @@ void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
           continue;
         }
         if (std::popcount(bits) <= 2) {
-          // Three or four (90% of the nodes with three or more hit children): sorted in
-          // registers by a stable network of compare-exchanges, the nearest reference never
-          // stored and reloaded as in the insertion sort below: primary single rays +7-9%,
-          // diffuse +1.5-2.5% (AVX2 alike). GCC compiles each exchange to a short branch;
-          // branch-free (an xor swap under a mask) was 1-7% slower: the nearest then waits
-          // for every exchange. A network for five: no faster.
+          // Three or four (most nodes with three or more hit children): sorted in registers
+          // by a stable network of compare-exchanges, the nearest reference never stored and
+          // reloaded as in the insertion sort below. GCC compiles each exchange to a short
+          // branch; branch-free, the nearest would wait for every exchange (the variants
+          // measured: perf/traversal.md).
           std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]),
                                 0, 0};
           const int k = std::countr_zero(bits);

@@ -33,8 +33,7 @@ class WideAccel {
   virtual const simd::WideStats& stats() const = 0;
 
   /// Closest hit: updates `hit` with a triangle hit at tmin <= t < min(hit.t, tmax).
-  /// Not virtual: a direct call of the kernel's entry (a layer of calls less per ray:
-  /// single rays +0.5-1%).
+  /// Not virtual: a direct call of the kernel's entry (a layer of calls less per ray).
   void intersect(const Ray& ray, Hit& hit) const { single_.intersect(single_.bvh, ray, hit); }
   /// Any hit with tmin <= t < tmax.
   bool occluded(const Ray& ray) const { return single_.occluded(single_.bvh, ray); }

@@ -19,8 +19,8 @@ namespace volley::accel {
 /// binary node that minimises the summed surface area of the wide nodes. Children with an
 /// empty box (the builder's subtree of degenerate triangles, which no ray can hit) are left
 /// out, the others keep the binary node's box bit for bit (so the slab tests agree with the
-/// oracle's). Against the greedy collapse (open the largest child until N), Sponza: 1765 ->
-/// 1231 nodes, 4.3 -> 5.7 children each, 2% fewer instructions per diffuse ray (conference 7%).
+/// oracle's). Fewer, fuller nodes than the greedy collapse (open the largest child until N;
+/// perf/build.md).
 /// Interior children of a node are allocated next to each other, depth first; leaves' blocks
 /// in the order the collapse meets them. Unused child slots are inert.
 ///

@@ -97,8 +97,8 @@ void require_aligned(const void* p, const char* name) {
 // kernels answer so (1 / 0 = inf, then NaN or no root: the consumer test pins it for every
 // test, ISA and query mode). Single rays and packets check it here, where it is free: the
 // packet check is a branch-free pass over SoA lanes (|dx| + |dy| + |dz| is 0 exactly when
-// all three are; NaN and Inf never give 0). Streams do not: a pass over AoS rays costs
-// about 1 ns per ray, 5-8% of a stream of coherent rays on Sponza (measured).
+// all three are; NaN and Inf never give 0). Streams do not: a pass over AoS rays would cost
+// a noticeable share of a stream of coherent rays (perf/traversal.md).
 
 /// True when d is the zero vector.
 bool zero_direction(const float* d) { return std::fabs(d[0]) + std::fabs(d[1]) + std::fabs(d[2]) == 0.0f; }

@@ -118,8 +118,7 @@ class Splitter {
     // occupied anyway, and clearing and sweeping 3 x bins bins per node would otherwise
     // dominate the build for the many small nodes near the leaves.
     // Nodes of at most kSmallNode primitives get at most kSmallNodeBins: the bottom levels
-    // hold most nodes, and there 8 bins found planes as good (kitchen SAH 24.66 -> 24.44,
-    // traversal within noise) for a 4-6% faster build (AVX-512 leaves, one thread).
+    // hold most nodes, and there 8 bins find planes as good for a faster build (perf/build.md).
     int nb = count < static_cast<std::uint32_t>(opt_.bins) ? static_cast<int>(count) : opt_.bins;
     if (count <= kSmallNode && nb > kSmallNodeBins) nb = kSmallNodeBins;
     const BinGrid grid(t.cbox, nb);
@@ -473,7 +472,7 @@ class Builder {
     // front in input order, the others to the back (written back to front, reversed below);
     // both sets are bounded. A parallel prefix scan over the counts: one pass on one thread,
     // on more a counting pass where oneTBB needs the prefix of a range it has not reached
-    // (serial, this pass was 8% of a 16-thread build). The bounds join with min / max that
+    // (serial, this pass showed in many-thread builds). The bounds join with min / max that
     // keep the first of equal values (as BBox::extend): the same for any split.
     const Scan total = tbb::parallel_scan(
         tbb::blocked_range<std::uint32_t>(0, n_, kInputChunk), Scan{},

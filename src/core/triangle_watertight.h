@@ -93,8 +93,8 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
 
   // Scaled barycentrics: 2D edge functions at the origin. Plain a*b - c*d on purpose: with
   // -ffp-contract=off both products round, so the triangle across an edge computes exactly
-  // the negative; a fused multiply-add rounds only one product and cracks open
-  // (0.6-0.8% leaks measured, docs/accuracy.md).
+  // the negative; a fused multiply-add rounds only one product and cracks open (leaks:
+  // docs/accuracy.md).
   T eu = cx * by - cy * bx;
   T ev = ax * cy - ay * cx;
   T ew = bx * ay - by * ax;

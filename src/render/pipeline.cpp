@@ -6,9 +6,8 @@ namespace volley::render {
 namespace {
 
 // Why the renderer does not cull back faces for occlusion rays even where it may: culling
-// measured faster (perf/specialize.md: with a runtime switch added to the watertight test
-// in a scratch build, dragon_100k's shadow rays took 12-15% less time on AVX2 and AVX-512,
-// same image), but the SIMD occlusion kernels have no culling variant to choose.
+// measured faster (perf/specialize.md), but the SIMD occlusion kernels have no culling
+// variant to choose.
 constexpr const char* kCullingNotUsed =
     "the SIMD occlusion kernels have no culling variant yet (an experimental one measured 12-15% less occlusion "
     "time, 3-4% of the render, same image, on dragon_100k: perf/specialize.md)";

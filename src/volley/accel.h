@@ -116,8 +116,7 @@ class VOLLEY_API Accel {
   /// lanes that diverge, beat ray-by-ray tracing on primary, shadow and diffuse rays); with
   /// SSE4.2 / AVX2 only runs whose directions share one octant are (primary rays in 4x4
   /// blocks, shadow rays toward one light), others go ray by ray, which was faster for
-  /// diffuse rays there. Measured, one thread, Sponza: primary 14 Mrays/s as packets vs
-  /// 3.8 ray by ray (AVX-512), shadow 18-21 vs 7.8. Same answers as intersect(ray) per ray.
+  /// diffuse rays there (perf/traversal.md). Same answers as intersect(ray) per ray.
   void intersect(const Ray* rays, std::size_t count, Hit* hits) const;
   /// Occlusion of a stream: blocked[i] = 1 when rays[i] is occluded, else 0. Regrouped as
   /// intersect(rays, count, hits).
