@@ -31,6 +31,7 @@
 
 #include "bench_common.h"
 #include "core/triangle.h"
+#include "simd/testing/prepare_ray.h"
 #include "simd/aligned.h"
 #include "simd/arch.h"
 #include "simd/block_build.h"

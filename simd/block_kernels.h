@@ -18,7 +18,8 @@
 namespace volley::simd {
 
 // Explicit instantiation declarations: the definitions live in the per-ISA files only
-// (one line there per line here). K = every packet size that is a multiple of the lanes.
+// (one line there per line here): those the wide BVH's walks call in the library's
+// (simd/isa_*.cpp), the rest in the testing library's (simd/testing/isa_*.cpp). K = every packet size that is a multiple of the lanes.
 extern template struct RayBlockKernels<Sse42, TriangleTest::moller>;
 extern template struct RayBlockKernels<Sse42, TriangleTest::plane>;
 extern template struct RayBlockKernels<Sse42, TriangleTest::watertight>;

@@ -1,18 +1,14 @@
-// AVX2 + FMA kernels (this file alone is compiled with -mavx2 -mfma).
-// Explicit instantiations only (docs/style.md rule 2): the bodies live in block_kernels.h and the
-// test headers, and check_weak_symbols.sh verifies that every weak symbol here is tagged.
+// AVX2 + FMA kernels of the library (this file alone, with wide_isa_avx2.cpp, is compiled with
+// -mavx2 -mfma): the packet kernels the wide BVH's packet walks call at their leaves (the
+// single-ray leaf kernels are inlined into the walk). Explicit instantiations only
+// (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
+// The forms only tests use are in simd/testing/isa_avx2.cpp.
 #include "simd/block_kernels.h"
 
 namespace volley::simd {
 
-template struct RayBlockKernels<Avx2, TriangleTest::moller>;
-template struct RayBlockKernels<Avx2, TriangleTest::plane>;
-template struct RayBlockKernels<Avx2, TriangleTest::watertight>;
-template struct PacketKernels<Avx2, TriangleTest::moller, 8>;
 template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
-template struct PacketKernels<Avx2, TriangleTest::plane, 8>;
 template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
-template struct PacketKernels<Avx2, TriangleTest::watertight, 8>;
 template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
 
 }  // namespace volley::simd

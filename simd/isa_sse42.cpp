@@ -1,21 +1,14 @@
-// SSE4.2 kernels (this file alone is compiled with -msse4.2).
-// Explicit instantiations only (docs/style.md rule 2): the bodies live in block_kernels.h and the
-// test headers, and check_weak_symbols.sh verifies that every weak symbol here is tagged.
+// SSE4.2 kernels of the library (this file alone, with wide_isa_sse42.cpp, is compiled with
+// -msse4.2): the packet kernels the wide BVH's packet walks call at their leaves (the
+// single-ray leaf kernels are inlined into the walk). Explicit instantiations only
+// (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
+// The forms only tests use are in simd/testing/isa_sse42.cpp.
 #include "simd/block_kernels.h"
 
 namespace volley::simd {
 
-template struct RayBlockKernels<Sse42, TriangleTest::moller>;
-template struct RayBlockKernels<Sse42, TriangleTest::plane>;
-template struct RayBlockKernels<Sse42, TriangleTest::watertight>;
-template struct PacketKernels<Sse42, TriangleTest::moller, 4>;
-template struct PacketKernels<Sse42, TriangleTest::moller, 8>;
 template struct PacketKernels<Sse42, TriangleTest::moller, 16>;
-template struct PacketKernels<Sse42, TriangleTest::plane, 4>;
-template struct PacketKernels<Sse42, TriangleTest::plane, 8>;
 template struct PacketKernels<Sse42, TriangleTest::plane, 16>;
-template struct PacketKernels<Sse42, TriangleTest::watertight, 4>;
-template struct PacketKernels<Sse42, TriangleTest::watertight, 8>;
 template struct PacketKernels<Sse42, TriangleTest::watertight, 16>;
 
 }  // namespace volley::simd

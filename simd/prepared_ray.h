@@ -7,8 +7,9 @@
 
 namespace volley::simd {
 
-/// One ray plus what the kernels would otherwise recompute per leaf. Built by
-/// prepare_ray(); immutable afterwards, so one PreparedRay may be reused for every leaf
+/// One ray plus what the kernels would otherwise recompute per leaf. Built by the
+/// single-ray walk's entry (simd/wide/single_walk.h) or, for tests, prepare_ray()
+/// (simd/testing/prepare_ray.h); immutable afterwards, so one PreparedRay may be reused for every leaf
 /// the ray visits. 64 bytes, one cache line.
 struct alignas(64) PreparedRay {
   Ray ray;            // 32 bytes: the ray as given
@@ -17,10 +18,5 @@ struct alignas(64) PreparedRay {
   float sure[2];      //  8 bytes: watertight any hit, core::sure_quotient_range(tmin, tmax)
 };
 static_assert(sizeof(PreparedRay) == 64, "PreparedRay: one cache line");
-
-/// Copies the ray and computes its Woop–Benthin–Wald shear exactly as the scalar oracle's
-/// make_woop_ray does (so the kernels agree with it bit for bit). With
-/// `with_shear == false` only the ray is copied (moller and plane need nothing else).
-PreparedRay prepare_ray(const Ray& ray, bool with_shear = true);
 
 }  // namespace volley::simd

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/triangle.h"
+#include "simd/testing/prepare_ray.h"
 #include "simd/aligned.h"
 #include "simd/arch.h"
 #include "simd/block_build.h"

@@ -1,7 +1,7 @@
 // The type-erased facade (simd/triangle_kernels.h) every test x ISA: create, build with
 // groups of every awkward size, and single-ray and packet queries per group against the
 // oracle over the same group.
-#include "simd/triangle_kernels.h"
+#include "simd/testing/triangle_kernels.h"
 
 #include "simd_test_util.h"
 

@@ -5,6 +5,7 @@
 #include "simd_test_util.h"
 
 #include "core/triangle_watertight.h"
+#include "simd/testing/prepare_ray.h"
 #include "simd/watertight.h"
 
 namespace {

@@ -1,6 +1,6 @@
 // TriangleKernels: the type-erased facade (baseline code). Each implementation forwards to
 // the kernels instantiated in the per-ISA files (block_kernels.h, extern templates).
-#include "simd/triangle_kernels.h"
+#include "simd/testing/triangle_kernels.h"
 
 #include <stdexcept>
 #include <string>

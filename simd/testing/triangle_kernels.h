@@ -1,6 +1,6 @@
-// The type-erased triangle kernels the accel/BVH code calls: one triangle test on one ISA,
-// its blocks, and the single-ray and packet query forms over runs of blocks (BVH leaves).
-// No xsimd here: callers compile at the baseline ISA.
+// The type-erased triangle kernels of the tests and benchmarks (the testing library, not
+// shipped): one triangle test on one ISA, its blocks, and the single-ray and packet query
+// forms over runs of blocks. No xsimd here: callers compile at the baseline ISA.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -9,6 +9,7 @@
 
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
+#include "simd/testing/prepare_ray.h"
 #include "simd/ray_packet.h"
 #include "volley/options.h"
 #include "volley/ray.h"

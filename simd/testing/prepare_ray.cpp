@@ -1,6 +1,6 @@
-// prepare_ray: the per-ray precomputation, done by the scalar oracle's own code so the
-// kernels see exactly the constants it would use.
-#include "simd/prepared_ray.h"
+// prepare_ray (prepare_ray.h): the per-ray precomputation, done by the scalar oracle's own
+// code so the kernels see exactly the constants it would use.
+#include "simd/testing/prepare_ray.h"
 
 #include "core/triangle_watertight.h"
 
