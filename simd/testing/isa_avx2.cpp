@@ -5,11 +5,13 @@
 
 namespace volley::simd {
 
-template struct RayBlockKernels<Avx2, TriangleTest::moller>;
-template struct RayBlockKernels<Avx2, TriangleTest::plane>;
-template struct RayBlockKernels<Avx2, TriangleTest::watertight>;
-template struct PacketKernels<Avx2, TriangleTest::moller, 8>;
-template struct PacketKernels<Avx2, TriangleTest::plane, 8>;
-template struct PacketKernels<Avx2, TriangleTest::watertight, 8>;
+// For each triangle test: the single-ray block kernels, packets of 8.
+#define VOLLEY_FORMS(test) \
+  template struct RayBlockKernels<Avx2, TriangleTest::test>; \
+  template struct PacketKernels<Avx2, TriangleTest::test, 8>;
+VOLLEY_FORMS(moller)
+VOLLEY_FORMS(plane)
+VOLLEY_FORMS(watertight)
+#undef VOLLEY_FORMS
 
 }  // namespace volley::simd

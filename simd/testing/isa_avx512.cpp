@@ -5,22 +5,19 @@
 
 namespace volley::simd {
 
-template struct RayBlockKernels<Avx512, TriangleTest::moller>;
-template struct RayBlockKernels<Avx512, TriangleTest::plane>;
-template struct RayBlockKernels<Avx512, TriangleTest::watertight>;
-template struct PacketKernels<Avx512, TriangleTest::moller, 16>;
-template struct PacketKernels<Avx512, TriangleTest::plane, 16>;
-template struct PacketKernels<Avx512, TriangleTest::watertight, 16>;
-// AVX-512 on 8 lanes (Avx512Ymm): the single-ray leaf kernels of the AVX-512 wide BVH
-// standalone, and its packet forms, so that every kernel test runs on it as on the other ISAs.
-template struct RayBlockKernels<Avx512Ymm, TriangleTest::moller>;
-template struct RayBlockKernels<Avx512Ymm, TriangleTest::plane>;
-template struct RayBlockKernels<Avx512Ymm, TriangleTest::watertight>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::moller, 8>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::moller, 16>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::plane, 8>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::plane, 16>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::watertight, 8>;
-template struct PacketKernels<Avx512Ymm, TriangleTest::watertight, 16>;
+// For each triangle test: the 16-wide single-ray block kernels and packets of 16 against
+// 16-wide blocks;
+// the same on 8 lanes (Avx512Ymm, the leaves of the AVX-512 wide BVH) with packets of 8
+// and 16, so that every kernel test runs on it as on the other ISAs.
+#define VOLLEY_FORMS(test) \
+  template struct RayBlockKernels<Avx512, TriangleTest::test>; \
+  template struct PacketKernels<Avx512, TriangleTest::test, 16>; \
+  template struct RayBlockKernels<Avx512Ymm, TriangleTest::test>; \
+  template struct PacketKernels<Avx512Ymm, TriangleTest::test, 8>; \
+  template struct PacketKernels<Avx512Ymm, TriangleTest::test, 16>;
+VOLLEY_FORMS(moller)
+VOLLEY_FORMS(plane)
+VOLLEY_FORMS(watertight)
+#undef VOLLEY_FORMS
 
 }  // namespace volley::simd

@@ -5,14 +5,14 @@
 
 namespace volley::simd {
 
-template struct RayBlockKernels<Sse42, TriangleTest::moller>;
-template struct RayBlockKernels<Sse42, TriangleTest::plane>;
-template struct RayBlockKernels<Sse42, TriangleTest::watertight>;
-template struct PacketKernels<Sse42, TriangleTest::moller, 4>;
-template struct PacketKernels<Sse42, TriangleTest::moller, 8>;
-template struct PacketKernels<Sse42, TriangleTest::plane, 4>;
-template struct PacketKernels<Sse42, TriangleTest::plane, 8>;
-template struct PacketKernels<Sse42, TriangleTest::watertight, 4>;
-template struct PacketKernels<Sse42, TriangleTest::watertight, 8>;
+// For each triangle test: the single-ray block kernels, packets of 4 and 8.
+#define VOLLEY_FORMS(test) \
+  template struct RayBlockKernels<Sse42, TriangleTest::test>; \
+  template struct PacketKernels<Sse42, TriangleTest::test, 4>; \
+  template struct PacketKernels<Sse42, TriangleTest::test, 8>;
+VOLLEY_FORMS(moller)
+VOLLEY_FORMS(plane)
+VOLLEY_FORMS(watertight)
+#undef VOLLEY_FORMS
 
 }  // namespace volley::simd

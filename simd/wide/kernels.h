@@ -123,6 +123,9 @@ struct WideKernels {
   static constexpr int W = kLanes<SingleArch>;
   using Block = BlockFor<Test, W>;
   using View = WideView<Block>;
+  /// Float lanes of the packet forms, and the block kernels of the packet walks' leaves.
+  using Float = detail::FloatB<Arch>;
+  using LeafPacket = PacketKernels<Arch, Test, K, W>;
 
   /// Closest hit of one ray: updates `hit` with every triangle hit at
   /// ray.tmin <= t < min(hit.t, ray.tmax) that is nearer (as RayBlockKernels::intersect).

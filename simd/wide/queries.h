@@ -54,6 +54,15 @@ int used_lanes(const Block& block) {
   return std::popcount(bits_from_mask<Arch>(used));
 }
 
+/// The triangles of a leaf's last block when it is at most half full, else 0: the packet
+/// leaves test those triangle by triangle (padding lanes cost a full test each in the block
+/// form), the blocks before it (count - 1 of them, or all when 0) as blocks.
+template <class Kernels>
+int sparse_tail(const typename Kernels::Block* blocks, std::uint32_t count) {
+  const int used = used_lanes<typename Kernels::SingleArch>(blocks[count - 1]);
+  return used > Kernels::W / 2 ? 0 : used;
+}
+
 /// Closest hit of one ray: every leaf lowers the bound to its nearest hit.
 template <class Kernels>
 struct ClosestHitRay {
@@ -96,28 +105,22 @@ struct AnyHitRay {
 /// Closest hits of a packet's lanes (hits.t on entry bounds each lane like tmax).
 template <class Kernels>
 struct ClosestHitPacket {
-  using Arch = typename Kernels::Isa;
-  using B = FloatB<Arch>;
-  using Packet = PacketKernels<Arch, Kernels::kTest, Kernels::K, Kernels::W>;
+  using B = typename Kernels::Float;
+  using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
   HitPacket<K>& hits;
 
-  B bound(int o, B tmax) const { return upper_bound<Arch>(B::load_aligned(hits.t + o), tmax); }
+  B bound(int o, B tmax) const { return upper_bound<typename Kernels::Isa>(B::load_aligned(hits.t + o), tmax); }
 
-  /// The block kernels, except that a last block at most half full is tested triangle by
-  /// triangle (padding lanes cost a full test each in the block form). Same answers and
-  /// order as PacketKernels::intersect.
+  /// The block kernels, a sparse last block triangle by triangle (sparse_tail). Same answers
+  /// and order as PacketKernels::intersect.
   LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                  std::uint32_t lanes, B* tfar) {
     prep.rays.active = lanes;
-    const auto& last = blocks[count - 1];
-    const int used = used_lanes<typename Kernels::SingleArch>(last);
-    if (used > Kernels::W / 2) {
-      Packet::intersect(prep, blocks, count, hits);
-    } else {
-      if (count > 1) Packet::intersect(prep, blocks, count - 1, hits);
-      for (int j = 0; j < used; ++j) Packet::intersect_triangle(prep, last, j, hits);
-    }
+    const int tail = sparse_tail<Kernels>(blocks, count);
+    const std::uint32_t whole = tail != 0 ? count - 1 : count;
+    if (whole != 0) Packet::intersect(prep, blocks, whole, hits);
+    for (int j = 0; j < tail; ++j) Packet::intersect_triangle(prep, blocks[whole], j, hits);
     for (int c = 0; c < K / L; ++c) {
       const B ht = B::load_aligned(hits.t + c * L);
       tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
@@ -139,9 +142,8 @@ struct ClosestHitPacket {
 /// Any hit of a packet's lanes: a lane is finished at its first hit.
 template <class Kernels>
 struct AnyHitPacket {
-  using Arch = typename Kernels::Isa;
-  using B = FloatB<Arch>;
-  using Packet = PacketKernels<Arch, Kernels::kTest, Kernels::K, Kernels::W>;
+  using B = typename Kernels::Float;
+  using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
 
   B bound(int, B tmax) const { return tmax; }
@@ -152,7 +154,7 @@ struct AnyHitPacket {
     const std::uint32_t now = occluded(prep, blocks, count, lanes);
     if (now == 0) return {0, false};
     for (int c = 0; c < K / L; ++c)
-      tfar[c] = xsimd::select(mask_from_bits<Arch>((now >> (c * L)) & ((1u << L) - 1u)),
+      tfar[c] = xsimd::select(mask_from_bits<typename Kernels::Isa>((now >> (c * L)) & ((1u << L) - 1u)),
                               B(-std::numeric_limits<float>::infinity()), tfar[c]);
     return {now, true};
   }
@@ -167,17 +169,16 @@ struct AnyHitPacket {
  private:
   static std::uint32_t occluded(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                                 std::uint32_t lanes) {
-    const auto& last = blocks[count - 1];
-    const int used = used_lanes<typename Kernels::SingleArch>(last);
-    if (used > Kernels::W / 2) return Packet::occluded(prep, blocks, count, lanes);
-    std::uint32_t hit = count > 1 ? Packet::occluded(prep, blocks, count - 1, lanes) : 0u;
-    if (hit == lanes) return hit;
+    const int tail = sparse_tail<Kernels>(blocks, count);
+    const std::uint32_t whole = tail != 0 ? count - 1 : count;
+    std::uint32_t hit = whole != 0 ? Packet::occluded(prep, blocks, whole, lanes) : 0u;
+    if (tail == 0 || hit == lanes) return hit;
     // Any hit within [tmin, tmax) of a lane: a closest-hit test against a fresh +inf bound.
     HitPacket<K> scratch;
     for (int i = 0; i < K; ++i) scratch.t[i] = std::numeric_limits<float>::infinity(), scratch.prim[i] = kInvalidPrim;
     const std::uint32_t saved = prep.rays.active;
     prep.rays.active = lanes & ~hit;
-    for (int j = 0; j < used; ++j) Packet::intersect_triangle(prep, last, j, scratch);
+    for (int j = 0; j < tail; ++j) Packet::intersect_triangle(prep, blocks[whole], j, scratch);
     prep.rays.active = saved;
     for (int i = 0; i < K; ++i)
       if (scratch.prim[i] != kInvalidPrim) hit |= 1u << i;

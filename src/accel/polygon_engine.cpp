@@ -4,15 +4,16 @@
 #include <vector>
 
 #include "accel/engine.h"
+#include "accel/scalar_engine.h"
 #include "core/bvh_traverse.h"
 
 namespace volley::accel {
 namespace {
 
-class PolygonEngine final : public Engine {
+class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
  public:
   PolygonEngine(const std::vector<core::Polygon>& polygons, const std::vector<std::uint32_t>& ids, bool robust)
-      : polygons_(polygons), ids_(ids), robust_(robust) {
+      : ScalarQueries(robust), polygons_(polygons), ids_(ids) {
     std::vector<core::BBox> boxes;
     boxes.reserve(polygons.size());
     for (const auto& poly : polygons) {
@@ -23,17 +24,6 @@ class PolygonEngine final : public Engine {
     bvh_ = core::build_bvh(boxes, core::BvhBuildOptions{});
   }
 
-  bool intersect(const Ray& ray, Hit& hit) const override {
-    core::RayT<float> r = to_core(ray);
-    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
-    return robust_ ? trace<false, true>(r, hit) : trace<false, false>(r, hit);
-  }
-  bool occluded(const Ray& ray) const override {
-    Hit unused;
-    const core::RayT<float> r = to_core(ray);
-    return robust_ ? trace<true, true>(r, unused) : trace<true, false>(r, unused);
-  }
-
   void describe(AccelInfo& info) const override {
     const core::BvhStats s = core::bvh_stats(bvh_);
     info.nodes += s.nodes;
@@ -42,7 +32,6 @@ class PolygonEngine final : public Engine {
     info.bytes += s.bytes;
   }
 
- private:
   template <bool AnyHit, bool Robust>
   bool trace(const core::RayT<float>& r, Hit& hit) const {
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
@@ -56,9 +45,9 @@ class PolygonEngine final : public Engine {
     });
   }
 
+ private:
   const std::vector<core::Polygon>& polygons_;  // Accel::Impl's (see Triangles)
   const std::vector<std::uint32_t>& ids_;
-  bool robust_;
   core::Bvh bvh_;
 };
 

@@ -1,0 +1,96 @@
+// What the scalar engines (oracle_engine.cpp, reference_engine.cpp, polygon_engine.cpp)
+// share: single-ray queries on core/'s binary BVH walk with the committed slab test, and
+// for triangles the BVH and plane data they keep.
+#pragma once
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "accel/engine.h"
+#include "core/bvh.h"
+#include "core/triangle.h"
+
+namespace volley::accel {
+
+/// The single-ray queries of an engine whose Derived::trace<AnyHit, Robust>(ray, hit) walks
+/// core/'s binary BVH (Robust: padded slabs, Options::robust). Packets go lane by lane
+/// (Engine's default).
+template <class Derived, class Base>
+class ScalarQueries : public Base {
+ public:
+  explicit ScalarQueries(bool robust) : robust_(robust) {}
+
+  bool intersect(const Ray& ray, Hit& hit) const override {
+    core::RayT<float> r = to_core(ray);
+    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
+    return robust_ ? self().template trace<false, true>(r, hit) : self().template trace<false, false>(r, hit);
+  }
+  bool occluded(const Ray& ray) const override {
+    Hit unused;
+    const core::RayT<float> r = to_core(ray);
+    return robust_ ? self().template trace<true, true>(r, unused) : self().template trace<true, false>(r, unused);
+  }
+
+ private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
+  bool robust_;
+};
+
+/// A scalar triangle engine in Real precision (the oracle in float, the reference in
+/// double): the binary BVH over the triangles as built, and for the plane test each
+/// triangle's planes. Derived provides trace().
+template <class Derived, class Real>
+class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
+ public:
+  ScalarTriangleEngine(TriangleTest test, bool robust) : ScalarQueries<Derived, TriangleEngine>(robust), test_(test) {}
+
+  core::BvhBuildOptions bvh_options() const override { return {}; }
+  void build(core::Bvh bvh, const Triangles& t) override {
+    bvh_ = std::move(bvh);
+    triangles_ = t;
+    stats_ = core::bvh_stats(bvh_, core::BvhBuildOptions{});
+    if (test_ != TriangleTest::plane) return;
+    planes_.reserve(t.count);
+    for (std::size_t i = 0; i < t.count; ++i) {
+      const glm::vec3* p = &t.vertices[3 * i];
+      planes_.push_back(
+          core::PlaneTriangle<Real>::from(core::Vec3<Real>(p[0]), core::Vec3<Real>(p[1]), core::Vec3<Real>(p[2])));
+    }
+  }
+  void describe(AccelInfo& info) const override {
+    info.nodes = stats_.nodes;
+    info.leaves = stats_.leaves;
+    info.depth = stats_.depth;
+    info.sah_cost = stats_.sah_cost;
+    info.mean_leaf_size = stats_.mean_leaf_size;
+    info.mean_children = 2.0;
+    // The triangle layout of the test in use (the input copy kept for re-commits not counted).
+    info.bytes = stats_.bytes + (test_ == TriangleTest::plane ? planes_.size() * sizeof(core::PlaneTriangle<Real>)
+                                                              : triangles_.count * 3 * sizeof(glm::vec3));
+  }
+
+ protected:
+  /// Triangle `prim` against `q` by the committed test (`woop`: q's shear).
+  bool test_triangle(const core::RayT<Real>& q, const core::WoopRay<Real>& woop, std::uint32_t prim,
+                     core::TriHit<Real>& h) const {
+    const glm::vec3* p = &triangles_.vertices[3 * prim];
+    const core::Vec3<Real> p0(p[0]), p1(p[1]), p2(p[2]);
+    switch (test_) {
+      case TriangleTest::plane:
+        return core::intersect_plane(q, planes_[prim], h);
+      case TriangleTest::moller:
+        return core::intersect_moller<Real, core::moller_fused_for(Isa::scalar)>(q, p0, p1, p2, h);
+      case TriangleTest::watertight:
+        return core::intersect_watertight(q, woop, p0, p1, p2, h);
+    }
+    return false;
+  }
+
+  TriangleTest test_;
+  core::Bvh bvh_;
+  core::BvhStats stats_;
+  Triangles triangles_{};
+  std::vector<core::PlaneTriangle<Real>> planes_;  ///< `plane` only
+};
+
+}  // namespace volley::accel
