@@ -103,6 +103,8 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const 
     if (polygon_engine) polygon_engine->intersect(p, h);
   };
   if constexpr (K == 16) {
+    // A full packet of a triangles-only scene: straight to the wide kernels, as single rays.
+    if (wide_only && all_lanes_active(rays)) return wide_only->intersect(rays, hits);
     if (all_lanes_active(rays)) return trace(rays, hits);
   }
   const std::uint32_t active = rays.active & lane_bits(K);
@@ -129,6 +131,7 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays) const {
     return blocked & p.active;
   };
   if constexpr (K == 16) {
+    if (wide_only && all_lanes_active(rays)) return wide_only->occluded(rays);
     if (all_lanes_active(rays)) return trace(rays);
   }
   RayPacket<16> p;

@@ -37,7 +37,7 @@ struct Accel::Impl {
   std::unique_ptr<accel::TriangleEngine> triangle_engine;
   std::unique_ptr<accel::Engine> polygon_engine;
   /// The wide BVH when it holds the whole scene (no polygons), else null: Accel's single-ray
-  /// queries call it directly (one call per ray less).
+  /// queries and full packets call it directly (a layer of calls less).
   const accel::WideAccel* wide_only = nullptr;
 
   void build();
