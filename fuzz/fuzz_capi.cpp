@@ -47,7 +47,7 @@ struct Case {
   const Geometry* geometry = nullptr;
   const std::vector<volley_ray>* rays = nullptr;
   int test = 0, isa = 0, robust = 0, reference_double = 0;
-  std::uint32_t first_triangle = VOLLEY_INVALID_PRIM;  ///< prim id of the first triangle, if added
+  std::uint32_t first_triangle = VOLLEY_INVALID_PRIM;  ///< the triangles' geometry id, if added
 };
 /// What the current input built, printed with a finding (the input itself is saved too).
 Case current;
@@ -128,7 +128,7 @@ Geometry make_geometry(FuzzedDataProvider& in) {
 }
 
 /// Adds `g` to `scene`; returns the status of the first call that failed, else VOLLEY_OK.
-/// The triangles' first prim id goes to *first_triangle when they were added.
+/// The triangles' geometry id goes to *first_triangle when they were added.
 volley_status add(volley_scene* scene, const Geometry& g, std::uint32_t* first_triangle = nullptr) {
   volley_status first_error = VOLLEY_OK;
   const volley_status s = volley_scene_add_triangles(scene, g.xyz.data(), g.xyz.size() / 3, g.indices.data(),
@@ -178,13 +178,14 @@ bool comparable(const volley_ray& r);
 
 bool same_bits(const volley_hit& a, const volley_hit& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-/// `got` and `want` answer the same ray alike: both miss, or the same prim at the same t
+/// `got` and `want` answer the same ray alike: both miss, or the same primitive of the same
+/// geometry at the same t
 /// (and u, v when `exact`), or two prims within 2 ulps of t (a coplanar tie).
 bool agree(const volley_hit& got, const volley_hit& want, bool exact) {
   const bool got_hit = got.prim != VOLLEY_INVALID_PRIM, want_hit = want.prim != VOLLEY_INVALID_PRIM;
   if (got_hit != want_hit) return false;
   if (!got_hit) return true;
-  if (got.prim == want.prim) return exact ? same_bits(got, want) : got.t == want.t;
+  if (got.prim == want.prim && got.geom == want.geom) return exact ? same_bits(got, want) : got.t == want.t;
   return within_ulps(got.t, want.t, 2);
 }
 
@@ -211,7 +212,7 @@ void check_packets(const volley_scene* scene, const std::vector<volley_ray>& ray
       p.tmin[i] = ray.tmin, p.tmax[i] = ray.tmax;
     }
     for (int i = 0; i < K; ++i) {
-      h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
+      h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu, h.geom[i] = 0xabad1deau, h.inst[i] = 0x0ddba11u;
       const std::uint32_t snan = 0x7f800001u;
       std::memcpy(&h.u[i], &snan, 4);
       h.v[i] = -0.0f;
@@ -224,7 +225,8 @@ void check_packets(const volley_scene* scene, const std::vector<volley_ray>& ray
       const std::size_t r = first + static_cast<std::size_t>(i);
       if (!((p.active >> i) & 1u)) {
         if (std::memcmp(&h.t[i], &before.t[i], 4) || std::memcmp(&h.u[i], &before.u[i], 4) ||
-            std::memcmp(&h.v[i], &before.v[i], 4) || h.prim[i] != before.prim[i] || ((blocked >> i) & 1u))
+            std::memcmp(&h.v[i], &before.v[i], 4) || h.prim[i] != before.prim[i] || h.geom[i] != before.geom[i] ||
+            h.inst[i] != before.inst[i] || ((blocked >> i) & 1u))
           finding("a packet wrote an inactive lane", r);
         continue;
       }
@@ -234,7 +236,7 @@ void check_packets(const volley_scene* scene, const std::vector<volley_ray>& ray
       // An active lane that finds nothing keeps its sentinel t (12345 bounds its search).
       const volley_hit want = single[r];
       const bool nearer = want.prim != VOLLEY_INVALID_PRIM && want.t < 12345.0f;
-      const volley_hit got{h.t[i], h.u[i], h.v[i], h.prim[i]};
+      const volley_hit got{h.t[i], h.u[i], h.v[i], h.prim[i], h.geom[i], h.inst[i]};
       if (!plausible(rays[r], want) || (got.prim != 0xdeadbeefu && !plausible(rays[r], got))) continue;
       if (nearer ? !agree(got, want, true) : got.prim != 0xdeadbeefu) {
         std::fprintf(stderr, "lane %d of %d (active %#x): prim %u t %a u %a v %a; single: prim %u t %a u %a v %a\n", i, K,
@@ -259,8 +261,8 @@ bool comparable(const volley_ray& r) {
 bool plausible(const volley_ray& r, const volley_hit& h) {
   const Geometry* g = current.geometry;
   if (h.prim == VOLLEY_INVALID_PRIM || !g || current.first_triangle == VOLLEY_INVALID_PRIM) return true;
-  const std::size_t local = h.prim - current.first_triangle;
-  if (h.prim < current.first_triangle || local >= g->indices.size() / 3) return true;  // a polygon
+  const std::size_t local = h.prim;
+  if (h.geom != current.first_triangle || local >= g->indices.size() / 3) return true;  // a polygon
   // The exact ray over [tmin, tmax] must meet the triangle's box (long double slab
   // distances: a zero difference stays exactly 0, so a ray in a face plane pointing
   // outwards by a subnormal step misses), and the hit point must lie in it.
@@ -339,8 +341,8 @@ void check_against_oracle(const std::vector<volley_ray>& rays, const std::vector
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const volley_ray& r = rays[i];
     const volley_hit& h = got[i];
-    const std::size_t local = h.prim - first_triangle;
-    if (h.prim != VOLLEY_INVALID_PRIM && h.prim >= first_triangle && local < triangles) {
+    const std::size_t local = h.prim;
+    if (h.prim != VOLLEY_INVALID_PRIM && h.geom == first_triangle && local < triangles) {
       // Sound: the oracle's own answer for this triangle, bit for bit.
       const float* p[3] = {vertex(local, 0), vertex(local, 1), vertex(local, 2)};
       float t, u, v;
@@ -360,7 +362,7 @@ void check_against_oracle(const std::vector<volley_ray>& rays, const std::vector
                                                       Vec3<float>(p[2][0], p[2][1], p[2][2]), th, variant);
         t = th.t, u = th.u, v = th.v;
       }
-      const volley_hit want{t, u, v, h.prim};
+      const volley_hit want{t, u, v, h.prim, first_triangle, VOLLEY_INVALID_ID};
       if (!hit || !same_bits(h, want)) {
         std::fprintf(stderr, "reported prim %u t %a u %a v %a; the oracle on it: %s t %a u %a v %a\n", h.prim, h.t,
                      h.u, h.v, hit ? "hit" : "miss", t, u, v);

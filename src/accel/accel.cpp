@@ -28,7 +28,11 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
       throw Error("add_triangles: triangle " + std::to_string(i / 3) + " uses vertex index " +
                   std::to_string(indices[i]) + ", but there are only " + std::to_string(vertex_count) +
                   " vertices");
-  const std::uint32_t first = impl_->next_id;
+  if (triangle_count > std::size_t{kInvalidPrim} - 1 - impl_->next_id)
+    throw Error("add_triangles: " + std::to_string(triangle_count) + " triangles more than the " +
+                std::to_string(kInvalidPrim - 1) + " primitives an Accel holds (it has " +
+                std::to_string(impl_->next_id) + ")");
+  const std::uint32_t geometry = impl_->new_geometry(static_cast<std::uint32_t>(triangle_count), false);
   auto& tris = impl_->triangles;
   tris.reserve(tris.size() + 3 * triangle_count);
   impl_->triangle_ids.reserve(impl_->triangle_ids.size() + triangle_count);
@@ -39,21 +43,34 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
     }
     impl_->triangle_ids.push_back(impl_->next_id++);
   }
-  impl_->committed = false;
-  return first;
+  return geometry;
 }
 
 std::uint32_t Accel::add_polygon(const float* xyz, std::size_t vertex_count) {
+  if (impl_->next_id >= kInvalidPrim - 1)
+    throw Error("add_polygon: the Accel holds " + std::to_string(impl_->next_id) + " primitives, the most it can");
   std::vector<glm::vec3> verts(vertex_count);
   for (std::size_t i = 0; i < vertex_count; ++i) verts[i] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+  core::Polygon polygon;
   try {
-    impl_->polygons.push_back(core::make_polygon(std::move(verts)));
+    polygon = core::make_polygon(std::move(verts));
   } catch (const std::invalid_argument& e) {
     throw Error(std::string("add_polygon: ") + e.what());
   }
-  impl_->polygon_ids.push_back(impl_->next_id);
+  const std::uint32_t geometry = impl_->new_geometry(1, true);
+  impl_->polygons.push_back(std::move(polygon));
+  impl_->polygon_ids.push_back(impl_->next_id++);
+  return geometry;
+}
+
+void Accel::disable_geometry(std::uint32_t geometry) {
+  impl_->geometry_at("disable_geometry", geometry).enabled = false;
   impl_->committed = false;
-  return impl_->next_id++;
+}
+
+void Accel::enable_geometry(std::uint32_t geometry) {
+  impl_->geometry_at("enable_geometry", geometry).enabled = true;
+  impl_->committed = false;
 }
 
 void Accel::commit(const Options& options) {
@@ -92,6 +109,7 @@ Hit Accel::intersect(const Ray& ray) const {
   if (const accel::WideAccel* w = impl_->wide_only) {
     Hit hit;
     w->intersect(ray, hit);
+    impl_->attribute(hit.prim, hit.geom);
     return hit;
   }
   return impl_->intersect(ray);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -46,6 +47,30 @@ bool all_lanes_active(const RayPacket<K>& p) {
 
 }  // namespace
 
+std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, bool polygon) {
+  if (geometries.size() >= kInvalidId) throw Error("add: the Accel holds the most geometries it can");
+  geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon});
+  committed = false;
+  return static_cast<std::uint32_t>(geometries.size() - 1);
+}
+
+Accel::Impl::Geometry& Accel::Impl::geometry_at(const char* caller, std::uint32_t geometry) {
+  if (geometry >= geometries.size())
+    throw Error(std::string(caller) + ": geometry " + std::to_string(geometry) + " does not exist (ids 0 .. " +
+                std::to_string(geometries.size()) + " exclusive were returned by add_triangles / add_polygon)");
+  return geometries[geometry];
+}
+
+void Accel::Impl::attribute_search(std::uint32_t& prim, std::uint32_t& geom) const {
+  // The last geometry whose first id is <= prim (empty geometries share their first id with
+  // the next one; the search passes them).
+  const auto it = std::upper_bound(geometries.begin(), geometries.end(), prim,
+                                   [](std::uint32_t id, const Geometry& g) { return id < g.first; });
+  const auto g = it - 1;
+  geom = static_cast<std::uint32_t>(g - geometries.begin());
+  prim -= g->first;
+}
+
 void Accel::Impl::build() {
   const std::size_t n = triangle_ids.size();
   triangle_engine.reset();
@@ -53,6 +78,20 @@ void Accel::Impl::build() {
   wide_only = nullptr;
   triangle_stats = {};
   degenerate = 0;
+  disabled = 0;
+  // Triangles of disabled geometries keep an empty box: no node holds them.
+  std::vector<unsigned char> left_out(n, 0);
+  enabled_polygons.clear();
+  enabled_polygon_ids.clear();
+  for (const Geometry& g : geometries) {
+    if (g.enabled && g.polygon) {
+      enabled_polygons.push_back(polygons[g.index]);
+      enabled_polygon_ids.push_back(polygon_ids[g.index]);
+    }
+    if (g.enabled) continue;
+    ++disabled;
+    if (!g.polygon) std::fill_n(left_out.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
+  }
   if (n != 0) {
     simd::AlignedVector<core::BBox> boxes(n);  // huge pages: 24 MB for a million triangles
     // Degenerate triangles can never be hit: an empty box keeps them out of traversal.
@@ -69,7 +108,7 @@ void Accel::Impl::build() {
           is_degenerate[i] = 1;
           continue;
         }
-        boxes[i] = triangle_box(p);
+        if (!left_out[i]) boxes[i] = triangle_box(p);
       }
     });
     degenerate = static_cast<std::size_t>(std::count(is_degenerate.begin(), is_degenerate.end(), 1));
@@ -81,14 +120,17 @@ void Accel::Impl::build() {
     triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
     triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n});
   }
-  if (!polygons.empty()) polygon_engine = accel::make_polygon_engine(polygons, polygon_ids, robust);
+  if (!enabled_polygons.empty())
+    polygon_engine = accel::make_polygon_engine(enabled_polygons, enabled_polygon_ids, robust);
   wide_only = triangle_engine && !polygon_engine ? triangle_engine->wide() : nullptr;
+  one_geometry = geometries.size() == 1;
 }
 
 Hit Accel::Impl::intersect(const Ray& ray) const {
   Hit hit;
   if (triangle_engine) triangle_engine->intersect(ray, hit);
   if (polygon_engine) polygon_engine->intersect(ray, hit);
+  attribute(hit.prim, hit.geom);
   return hit;
 }
 
@@ -98,6 +140,38 @@ bool Accel::Impl::occluded(const Ray& ray) const {
 
 template <int K>
 void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const {
+  // The lanes an engine writes (a nearer hit: t's bits change) get their geometry and
+  // index; the others keep what the caller passed. Inactive lanes are not read.
+  std::uint32_t before[K];
+  if (all_lanes_active(rays) && one_geometry) {
+    // Every lane ours and one geometry (prim needs no change): branch-free over all lanes.
+    std::memcpy(before, hits.t, sizeof(before));
+    trace_packet(rays, hits);
+    for (int i = 0; i < K; ++i) {
+      std::uint32_t now;
+      std::memcpy(&now, &hits.t[i], 4);
+      const bool written = now != before[i];
+      hits.geom[i] = written ? 0u : hits.geom[i];
+      hits.inst[i] = written ? kInvalidId : hits.inst[i];
+    }
+    return;
+  }
+  const std::uint32_t active = rays.active & lane_bits(K);
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    std::memcpy(&before[i], &hits.t[i], 4);
+  }
+  trace_packet(rays, hits);
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    if (std::memcmp(&before[i], &hits.t[i], 4) == 0) continue;
+    attribute(hits.prim[i], hits.geom[i]);
+    hits.inst[i] = kInvalidId;
+  }
+}
+
+template <int K>
+void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits) const {
   auto trace = [&](const RayPacket<16>& p, HitPacket<16>& h) {
     if (triangle_engine) triangle_engine->intersect(p, h);
     if (polygon_engine) polygon_engine->intersect(p, h);
@@ -114,12 +188,12 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const 
   reset(h);
   for (std::uint32_t b = active; b != 0; b &= b - 1) {
     const int i = __builtin_ctz(b);
-    h.t[i] = hits.t[i], h.u[i] = hits.u[i], h.v[i] = hits.v[i], h.prim[i] = hits.prim[i];
+    set_hit(h, i, hit_of(hits, i));
   }
   trace(p, h);
   for (std::uint32_t b = active; b != 0; b &= b - 1) {
     const int i = __builtin_ctz(b);
-    hits.t[i] = h.t[i], hits.u[i] = h.u[i], hits.v[i] = h.v[i], hits.prim[i] = h.prim[i];
+    set_hit(hits, i, hit_of(h, i));
   }
 }
 
@@ -151,6 +225,8 @@ AccelInfo Accel::Impl::info() const {
   info.triangles = triangle_ids.size();
   info.degenerate = degenerate;
   info.polygons = polygons.size();
+  info.geometries = geometries.size();
+  info.disabled = disabled;
   info.test = test;
   info.isa = isa;
   info.robust = robust;

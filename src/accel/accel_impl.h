@@ -18,11 +18,23 @@
 namespace volley {
 
 struct Accel::Impl {
-  // Input, in prim-id order of each kind.
+  /// One add_triangles / add_polygon call: its primitives have the internal ids first ..
+  /// first + count (the engines answer with those; attribute() turns one back into the
+  /// geometry and the index within it).
+  struct Geometry {
+    std::uint32_t first;  ///< internal id of its first primitive
+    std::uint32_t count;  ///< primitives
+    std::size_t index;    ///< its first primitive's place in triangle_ids or polygon_ids
+    bool polygon;
+    bool enabled = true;
+  };
+
+  // Input, in internal-id order of each kind.
   std::vector<glm::vec3> triangles;  ///< 3 vertices per triangle
   std::vector<std::uint32_t> triangle_ids;
   std::vector<core::Polygon> polygons;
   std::vector<std::uint32_t> polygon_ids;
+  std::vector<Geometry> geometries;  ///< by geometry id
   std::uint32_t next_id = 0;
 
   // Committed state.
@@ -34,11 +46,30 @@ struct Accel::Impl {
   double build_seconds = 0.0;
   std::size_t degenerate = 0;
   core::BvhStats triangle_stats;  ///< of the binary triangle BVH, as built (unit costs)
+  std::size_t disabled = 0;       ///< geometries left out at the commit
+  bool one_geometry = false;      ///< the committed scene has one geometry (hits need no search)
   std::unique_ptr<accel::TriangleEngine> triangle_engine;
   std::unique_ptr<accel::Engine> polygon_engine;
+  std::vector<core::Polygon> enabled_polygons;  ///< what polygon_engine holds (enabled geometries)
+  std::vector<std::uint32_t> enabled_polygon_ids;
   /// The wide BVH when it holds the whole scene (no polygons), else null: Accel's single-ray
   /// queries and full packets call it directly (a layer of calls less).
   const accel::WideAccel* wide_only = nullptr;
+
+  /// Registers the geometry of the next `count` ids and returns its id; uncommits.
+  std::uint32_t new_geometry(std::uint32_t count, bool polygon);
+  /// The geometry with id `geometry`; Error naming `caller` when there is none.
+  Geometry& geometry_at(const char* caller, std::uint32_t geometry);
+  /// An engine's answer (prim = internal id) as the API reports it: the geometry and the
+  /// index within it. Leaves a miss as it is.
+  void attribute(std::uint32_t& prim, std::uint32_t& geom) const {
+    if (prim == kInvalidPrim) return;
+    if (one_geometry) {
+      geom = 0;
+      return;
+    }
+    attribute_search(prim, geom);
+  }
 
   void build();
   Hit intersect(const Ray& ray) const;
@@ -51,6 +82,12 @@ struct Accel::Impl {
   void intersect(const Ray* rays, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const;
   AccelInfo info() const;
+
+ private:
+  /// attribute() for a scene of several geometries: a binary search of the first ids.
+  void attribute_search(std::uint32_t& prim, std::uint32_t& geom) const;
+  template <int K>
+  void trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits) const;
 };
 
 }  // namespace volley

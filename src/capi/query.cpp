@@ -27,7 +27,8 @@ static_assert(sizeof(volley_ray) == sizeof(Ray) && offsetof(volley_ray, org) == 
               "volley_ray is volley::Ray");
 static_assert(sizeof(volley_hit) == sizeof(Hit) && offsetof(volley_hit, t) == offsetof(Hit, t) &&
                   offsetof(volley_hit, u) == offsetof(Hit, u) && offsetof(volley_hit, v) == offsetof(Hit, v) &&
-                  offsetof(volley_hit, prim) == offsetof(Hit, prim),
+                  offsetof(volley_hit, prim) == offsetof(Hit, prim) && offsetof(volley_hit, geom) == offsetof(Hit, geom) &&
+                  offsetof(volley_hit, inst) == offsetof(Hit, inst),
               "volley_hit is volley::Hit");
 static_assert(std::is_trivially_copyable_v<Ray> && std::is_trivially_copyable_v<Hit>, "copied with memcpy");
 
@@ -63,7 +64,8 @@ constexpr bool same_layout() {
          offsetof(R, active) == offsetof(RayPacket<K>, active) && sizeof(H) == sizeof(HitPacket<K>) &&
          alignof(H) == alignof(HitPacket<K>) && offsetof(H, t) == offsetof(HitPacket<K>, t) &&
          offsetof(H, u) == offsetof(HitPacket<K>, u) && offsetof(H, v) == offsetof(HitPacket<K>, v) &&
-         offsetof(H, prim) == offsetof(HitPacket<K>, prim);
+         offsetof(H, prim) == offsetof(HitPacket<K>, prim) && offsetof(H, geom) == offsetof(HitPacket<K>, geom) &&
+         offsetof(H, inst) == offsetof(HitPacket<K>, inst);
 }
 static_assert(same_layout<4>() && same_layout<8>() && same_layout<16>(), "C packets are RayPacket<K>/HitPacket<K>");
 
@@ -158,6 +160,7 @@ void reset_hits(Hits* hits) {
     hits->t[i] = std::numeric_limits<float>::infinity();
     hits->u[i] = hits->v[i] = 0.0f;
     hits->prim[i] = VOLLEY_INVALID_PRIM;
+    hits->geom[i] = hits->inst[i] = VOLLEY_INVALID_ID;
   }
 }
 

@@ -155,7 +155,7 @@ volley_status volley_scene_create(volley_scene** out) {
 void volley_scene_destroy(volley_scene* scene) { delete scene; }
 
 volley_status volley_scene_add_triangles(volley_scene* scene, const float* xyz, size_t vertex_count,
-                                         const uint32_t* indices, size_t triangle_count, uint32_t* first_prim) {
+                                         const uint32_t* indices, size_t triangle_count, uint32_t* geometry) {
   return guarded("volley_scene_add_triangles", VOLLEY_ERROR_INVALID_GEOMETRY, [&] {
     require_pointer(scene, "scene");
     require_triple_fits(vertex_count, "vertex_count");
@@ -171,14 +171,15 @@ volley_status volley_scene_add_triangles(volley_scene* scene, const float* xyz, 
                                                 std::to_string(vertex_count) + " vertices");
     // Accel checks the same again; it never throws here, so a failure above leaves the
     // scene untouched (Accel::add_triangles itself may stop half-way through a mesh).
-    const std::uint32_t first = scene->accel.add_triangles(xyz, vertex_count, indices, triangle_count);
+    const std::uint32_t id = scene->accel.add_triangles(xyz, vertex_count, indices, triangle_count);
     scene->prims += triangle_count;
     scene->committed = false;
-    if (first_prim) *first_prim = first;
+    if (geometry) *geometry = id;
   });
 }
 
-volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, size_t vertex_count, uint32_t* prim) {
+volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, size_t vertex_count,
+                                       uint32_t* geometry) {
   return guarded("volley_scene_add_polygon", VOLLEY_ERROR_INVALID_GEOMETRY, [&] {
     require_pointer(scene, "scene");
     require_pointer(xyz, "xyz");
@@ -192,7 +193,24 @@ volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, si
     const std::uint32_t id = scene->accel.add_polygon(xyz, vertex_count);
     scene->prims += 1;
     scene->committed = false;
-    if (prim) *prim = id;
+    if (geometry) *geometry = id;
+  });
+}
+
+volley_status volley_scene_disable_geometry(volley_scene* scene, uint32_t geometry) {
+  // (Accel's Error for an unknown id is an argument error here.)
+  return guarded("volley_scene_disable_geometry", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
+    require_pointer(scene, "scene");
+    scene->accel.disable_geometry(geometry);
+    scene->committed = false;
+  });
+}
+
+volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometry) {
+  return guarded("volley_scene_enable_geometry", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
+    require_pointer(scene, "scene");
+    scene->accel.enable_geometry(geometry);
+    scene->committed = false;
   });
 }
 
@@ -234,6 +252,8 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.block_width = a.block_width;
     out.test = from_test(a.test);
     out.isa = from_isa(a.isa);
+    out.geometries = a.geometries;
+    out.disabled = a.disabled;
     *info = out;
   });
 }

@@ -29,6 +29,8 @@ Runner register_info(CLI::App& app) {
     std::printf("scene       %s\n", args->scene.c_str());
     std::printf("geometry    %zu triangles (%zu degenerate), %zu polygons, %zu vertices\n", info.triangles,
                 info.degenerate, info.polygons, desc.mesh.positions.size());
+    std::printf("geometries  %zu (%zu objects of triangles, %zu polygons; each hit names its geometry)\n",
+                info.geometries, info.geometries - info.polygons, info.polygons);
     std::printf("materials   %zu; lights %zu%s\n", scene.materials().size(), scene.lights().size(),
                 desc.lights.empty() ? " (automatic)" : "");
     std::printf("camera      %s, %dx%d\n", desc.has_camera ? "from scene" : "automatic (frames the bounds)",

@@ -15,7 +15,14 @@
 namespace volley::io {
 namespace {
 
-static_assert(sizeof(Ray) == 32 && sizeof(Hit) == 16, "records are the public structs byte for byte");
+static_assert(sizeof(Ray) == 32 && sizeof(Hit) == 24, "records are the public structs byte for byte");
+
+/// A version-1 .vhit record: a Hit before geometries (prim was the scene-wide id).
+struct HitV1 {
+  float t, u, v;
+  std::uint32_t prim;
+};
+static_assert(sizeof(HitV1) == 16);
 static_assert(sizeof(float) == 4 && std::numeric_limits<float>::is_iec559, "records hold IEEE binary32");
 
 using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
@@ -61,7 +68,8 @@ std::string quote_magic(const unsigned char* m) {
 // Reads header and records of one format into `out` (Record = Ray or Hit).
 template <class Record>
 std::vector<Record> read_records(const std::filesystem::path& file, const char magic[4], const char* what,
-                                 const char* other_magic, const char* other_what) {
+                                 const char* other_magic, const char* other_what, std::uint32_t want_version,
+                                 const std::string& versions) {
   std::error_code ec;
   const auto status = std::filesystem::status(file, ec);
   if (!std::filesystem::exists(status)) throw LoadError(file, "file not found");
@@ -83,9 +91,9 @@ std::vector<Record> read_records(const std::filesystem::path& file, const char m
     throw LoadError(file, "truncated header: " + std::to_string(got) + " bytes, expected " +
                               std::to_string(kRayFileHeaderBytes) + " (magic, u32 version, u64 count)");
   const std::uint32_t version = le32(header + 4);
-  if (version != kRayFileVersion)
-    throw LoadError(file, "unsupported " + std::string(what) + " version " + std::to_string(version) +
-                              " (expected " + std::to_string(kRayFileVersion) + ")");
+  if (version != want_version)
+    throw LoadError(file, "unsupported " + std::string(what) + " version " + std::to_string(version) + " (expected " +
+                              versions + ")");
   const std::uint64_t count = le64(header + 8);
   const std::uintmax_t payload = size - kRayFileHeaderBytes;
   if (count > payload / sizeof(Record))
@@ -105,8 +113,8 @@ std::vector<Record> read_records(const std::filesystem::path& file, const char m
 }
 
 template <class Record>
-void write_records(const std::filesystem::path& file, const char magic[4], std::span<const Record> records,
-                   const char* what) {
+void write_records(const std::filesystem::path& file, const char magic[4], std::uint32_t version,
+                   std::span<const Record> records, const char* what) {
   auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": cannot write " + what + " (" + why + ")");
   };
@@ -119,7 +127,7 @@ void write_records(const std::filesystem::path& file, const char magic[4], std::
   if (!f) fail(std::strerror(errno));
   unsigned char header[kRayFileHeaderBytes];
   std::memcpy(header, magic, 4);
-  put_le32(header + 4, kRayFileVersion);
+  put_le32(header + 4, version);
   put_le32(header + 8, static_cast<std::uint32_t>(records.size()));
   put_le32(header + 12, static_cast<std::uint32_t>(std::uint64_t(records.size()) >> 32));
   bool ok = std::fwrite(header, 1, sizeof(header), f.get()) == sizeof(header);
@@ -141,19 +149,36 @@ void write_records(const std::filesystem::path& file, const char magic[4], std::
 }  // namespace
 
 std::vector<Ray> read_rays(const std::filesystem::path& file) {
-  return read_records<Ray>(file, "VRAY", "ray file (.vray)", "VHIT", "hit file (.vhit)");
+  return read_records<Ray>(file, "VRAY", "ray file (.vray)", "VHIT", "hit file (.vhit)", kRayFileVersion,
+                           std::to_string(kRayFileVersion));
 }
 
 void write_rays(const std::filesystem::path& file, std::span<const Ray> rays) {
-  write_records<Ray>(file, "VRAY", rays, "ray file");
+  write_records<Ray>(file, "VRAY", kRayFileVersion, rays, "ray file");
 }
 
 std::vector<Hit> read_hits(const std::filesystem::path& file) {
-  return read_records<Hit>(file, "VHIT", "hit file (.vhit)", "VRAY", "ray file (.vray)");
+  const std::string versions = std::to_string(kHitFileVersion) + " or 1";
+  // The version decides the record size; a file too short to say is left to the full read.
+  unsigned char header[8] = {};
+  if (File f(std::fopen(file.c_str(), "rb"), &std::fclose); f) {
+    if (std::fread(header, 1, sizeof(header), f.get()) == sizeof(header) && std::memcmp(header, "VHIT", 4) == 0 &&
+        le32(header + 4) == 1) {
+      const std::vector<HitV1> old =
+          read_records<HitV1>(file, "VHIT", "hit file (.vhit)", "VRAY", "ray file (.vray)", 1, versions);
+      std::vector<Hit> hits(old.size());
+      for (std::size_t i = 0; i < old.size(); ++i) {
+        hits[i] = {old[i].t, old[i].u, old[i].v, old[i].prim};
+        if (hits[i].hit()) hits[i].geom = 0;  // one geometry: prim ids were scene-wide
+      }
+      return hits;
+    }
+  }
+  return read_records<Hit>(file, "VHIT", "hit file (.vhit)", "VRAY", "ray file (.vray)", kHitFileVersion, versions);
 }
 
 void write_hits(const std::filesystem::path& file, std::span<const Hit> hits) {
-  write_records<Hit>(file, "VHIT", hits, "hit file");
+  write_records<Hit>(file, "VHIT", kHitFileVersion, hits, "hit file");
 }
 
 }  // namespace volley::io

@@ -45,13 +45,21 @@ struct PointLight {
   glm::vec3 intensity{1.0f};
 };
 
+/// A scene object made of triangles: its run of the merged mesh's triangles.
+struct ObjectDesc {
+  std::string name;                ///< the object's "name", else its JSON path or file name
+  std::size_t first_triangle = 0;  ///< index of its first triangle in MeshDesc
+  std::size_t triangle_count = 0;
+};
+
 /// All triangles of the scene merged in one indexed mesh (object transforms applied),
-/// in file order: triangle i of this mesh is prim id i.
+/// in file order, and the objects they came from (one geometry each in the Accel).
 struct MeshDesc {
   std::vector<glm::vec3> positions;
   std::vector<std::uint32_t> indices;        ///< 3 per triangle
   std::vector<std::uint32_t> material;       ///< 1 per triangle, index into SceneDesc::materials
   std::vector<glm::vec3> corner_normals;     ///< 3 per triangle, or empty (use geometric normals)
+  std::vector<ObjectDesc> objects;           ///< in order, covering every triangle once
   std::size_t triangle_count() const { return indices.size() / 3; }
 };
 

@@ -319,9 +319,14 @@ void read_objects(const Json& j, const JsonPath& at, Context& ctx) {
     if (obj.contains("name")) get_string(obj["name"], oat["name"]);
     const glm::mat4 transform =
         obj.contains("transform") ? read_transform(obj["transform"], oat["transform"]) : glm::mat4(1.0f);
+    MeshDesc& mesh = ctx.scene.mesh;
+    const std::size_t first = mesh.triangle_count();
     if (type == "mesh") read_mesh(obj, oat, transform, ctx);
     if (type == "triangles") read_triangles(obj, oat, transform, ctx);
     if (type == "polygon") read_polygon(obj, oat, transform, ctx);
+    if (type != "polygon")
+      mesh.objects.push_back({obj.contains("name") ? obj["name"].get<std::string>() : oat.str(), first,
+                              mesh.triangle_count() - first});
   }
 }
 
@@ -355,6 +360,7 @@ SceneDesc load_scene(const std::filesystem::path& file, const std::filesystem::p
     scene.source = file.string();
     if (ext == ".obj") load_obj(file, glm::mat4(1.0f), std::nullopt, scene);
     else load_ply(file, glm::mat4(1.0f), std::nullopt, scene);
+    scene.mesh.objects.push_back({file.filename().string(), 0, scene.mesh.triangle_count()});
   } else {
     throw LoadError(file, "unknown scene file type \"" + ext + "\" (expected .json, .obj or .ply)");
   }

@@ -64,9 +64,18 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     lights_.push_back({pos, glm::vec3(0.5f * d * d)});
   }
 
-  if (!positions_.empty())
-    accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data(), indices_.size() / 3);
+  // One geometry per object (a whole mesh made by hand, without objects, is one), then one
+  // per polygon; prim_index() turns a hit back into the merged mesh's numbering.
+  std::vector<io::ObjectDesc> objects = desc.mesh.objects;
+  if (objects.empty() && !indices_.empty()) objects.push_back({"mesh", 0, indices_.size() / 3});
+  for (const io::ObjectDesc& o : objects) {
+    if (positions_.empty()) break;
+    accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data() + 3 * o.first_triangle,
+                         o.triangle_count);
+    geometry_base_.push_back(static_cast<std::uint32_t>(o.first_triangle));
+  }
   for (const auto& poly : desc.polygons) {
+    geometry_base_.push_back(static_cast<std::uint32_t>(indices_.size() / 3 + polygons_.size()));
     try {
       accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
     } catch (const Error& e) {
@@ -102,13 +111,14 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
   SurfacePoint s;
   const glm::vec3 dir(ray.dir[0], ray.dir[1], ray.dir[2]);
   const std::size_t tri_count = indices_.size() / 3;
-  if (hit.prim < tri_count) {
-    const std::uint32_t* idx = &indices_[3 * hit.prim];
+  const std::uint32_t prim = prim_index(hit);
+  if (prim < tri_count) {
+    const std::uint32_t* idx = &indices_[3 * prim];
     const glm::vec3 &p0 = positions_[idx[0]], &p1 = positions_[idx[1]], &p2 = positions_[idx[2]];
     s.p = hit_point(p0, p1, p2, hit.u, hit.v, s.p_error);
     s.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
     if (Smooth && !corner_normals_.empty()) {
-      const glm::vec3* n = &corner_normals_[3 * hit.prim];
+      const glm::vec3* n = &corner_normals_[3 * prim];
       const float b0 = 1.0f - hit.u - hit.v;
       s.ns = b0 * n[0] + hit.u * n[1] + hit.v * n[2];
       const float len = glm::length(s.ns);
@@ -116,9 +126,9 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
     } else {
       s.ns = s.ng;
     }
-    s.material = tri_material_[hit.prim];
+    s.material = tri_material_[prim];
   } else {
-    const PolygonShading& poly = polygons_[hit.prim - tri_count];
+    const PolygonShading& poly = polygons_[prim - tri_count];
     const glm::vec3 org(ray.org[0], ray.org[1], ray.org[2]);
     const glm::vec3 p = org + hit.t * dir;
     // Project onto the plane: the bound then only covers the plane equation's rounding.

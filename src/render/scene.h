@@ -50,6 +50,9 @@ class Scene {
   Scene(const io::SceneDesc& desc, int width, int height, const Options& options);
 
   const Accel& accel() const { return accel_; }
+  /// A hit's primitive in the merged numbering of positions() / indices() (triangles
+  /// first, then polygons): the Accel reports the geometry and the index within it.
+  std::uint32_t prim_index(const Hit& hit) const { return geometry_base_[hit.geom] + hit.prim; }
   const core::Camera& camera() const { return camera_; }
   const std::vector<io::Material>& materials() const { return materials_; }
   const std::vector<io::PointLight>& lights() const { return lights_; }
@@ -74,6 +77,7 @@ class Scene {
 
  private:
   Accel accel_;
+  std::vector<std::uint32_t> geometry_base_;  ///< per geometry id: its first primitive's merged index
   core::Camera camera_;
   std::vector<io::Material> materials_;
   std::vector<io::PointLight> lights_;

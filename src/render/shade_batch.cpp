@@ -73,12 +73,12 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
   if (light_count == 0 && !how.then_reads_surface) {
     for (std::size_t i = 0; i < n; ++i) {
       const Hit& h = hits[i];
-      if (!h.hit() || h.prim >= triangles) {
+      if (!h.hit() || scene.prim_index(h) >= triangles) {
         sum[paths[i].pixel] += how.one(scene, paths[i], h, max_depth, next, shadows);
         continue;
       }
       SurfacePoint sp;
-      sp.material = tri_material[h.prim];
+      sp.material = tri_material[scene.prim_index(h)];
       sum[paths[i].pixel] += how.then(scene, paths[i], sp, glm::vec3(0.0f), max_depth, next);
     }
     return;
@@ -90,11 +90,11 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
   std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Hit& h = hits[i];
-    if (!h.hit() || h.prim >= triangles) {
+    if (!h.hit() || scene.prim_index(h) >= triangles) {
       lane_of[i] = kNotInLanes;
       continue;
     }
-    const std::uint32_t* t = idx + 3 * std::size_t(h.prim);
+    const std::uint32_t* t = idx + 3 * std::size_t(scene.prim_index(h));
     set_row3(rows, stride, kP0X, count, pos[t[0]]);
     set_row3(rows, stride, kP1X, count, pos[t[1]]);
     set_row3(rows, stride, kP2X, count, pos[t[2]]);
@@ -133,7 +133,7 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
       continue;
     }
     SurfacePoint sp;
-    sp.material = tri_material[hits[i].prim];
+    sp.material = tri_material[scene.prim_index(hits[i])];
     const io::Material& m = materials[sp.material];
     const bool specular = m.specular != glm::vec3(0.0f);
     if (m.diffuse != glm::vec3(0.0f) || specular) {

@@ -35,6 +35,8 @@ struct AccelInfo {
   std::size_t triangles = 0;       ///< triangles added
   std::size_t degenerate = 0;      ///< zero-area triangles among them (never hit)
   std::size_t polygons = 0;        ///< planar polygons added
+  std::size_t geometries = 0;      ///< geometries (one per add_triangles / add_polygon call)
+  std::size_t disabled = 0;        ///< geometries disabled at the commit (left out of the structure)
   std::size_t nodes = 0;           ///< BVH nodes (wide: interior nodes; binary: all nodes)
   std::size_t leaves = 0;          ///< BVH leaves
   std::size_t depth = 0;           ///< deepest leaf (root = 0)
@@ -70,17 +72,29 @@ class VOLLEY_API Accel {
   Accel(const Accel&) = delete;             ///< not copyable (a BVH can be large): move it
   Accel& operator=(const Accel&) = delete;  ///< not copyable: move it
 
-  /// Adds an indexed triangle mesh. `xyz` holds 3*vertex_count floats, `indices`
-  /// 3*triangle_count vertex indices. Data is copied. Prim ids are assigned in order,
-  /// continuing from earlier additions; returns the id of the first triangle.
-  /// Throws Error for an index out of range or a non-finite vertex.
+  /// Adds an indexed triangle mesh as a new geometry and returns its id (0, 1, 2, ... in
+  /// the order of add_triangles and add_polygon calls). `xyz` holds 3*vertex_count floats,
+  /// `indices` 3*triangle_count vertex indices. Data is copied. A hit on triangle i reports
+  /// geom = the id returned and prim = i. Throws Error for an index out of range, a
+  /// non-finite vertex, or more than 2^32 - 2 primitives in all.
   std::uint32_t add_triangles(const float* xyz, std::size_t vertex_count,
                               const std::uint32_t* indices, std::size_t triangle_count);
 
   /// Adds one planar polygon (convex or concave, >= 3 vertices, 3*vertex_count floats,
-  /// in order around the boundary). Returns its prim id. Throws Error when it is not
-  /// planar within 1e-4 of its size, has a non-finite vertex or zero area.
+  /// in order around the boundary) as a new geometry and returns its id (hits report
+  /// prim = 0). Throws Error when it is not planar within 1e-4 of its size, has a
+  /// non-finite vertex or zero area.
   std::uint32_t add_polygon(const float* xyz, std::size_t vertex_count);
+
+  /// Leaves a geometry out of the structure from the next commit() on (as Embree's
+  /// rtcDisableGeometry): nothing of it is hit, and it costs the walks nothing. Its data
+  /// stays; enable_geometry() brings it back at a later commit. Uncommits the Accel.
+  /// Throws Error for an id no add call returned.
+  void disable_geometry(std::uint32_t geometry);
+
+  /// Brings a disabled geometry back from the next commit() on (a no-op for an enabled
+  /// one). Uncommits the Accel. Throws Error for an id no add call returned.
+  void enable_geometry(std::uint32_t geometry);
 
   /// Builds the acceleration structure. Call again after adding more geometry. Throws
   /// Error (leaving the Accel unchanged) when the CPU lacks options.isa, or when

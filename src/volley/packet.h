@@ -25,20 +25,22 @@ static_assert(sizeof(RayPacket<4>) == 32 * 4 + 64, "RayPacket<4>: 128 B lanes + 
 static_assert(sizeof(RayPacket<8>) == 32 * 8 + 64, "RayPacket<8>: 256 B lanes + 64 B mask line");
 static_assert(sizeof(RayPacket<16>) == 32 * 16 + 64, "RayPacket<16>: 512 B lanes + 64 B mask line");
 
-/// Closest-hit answers of K rays in SoA form, 64-byte aligned. A lane with no hit yet
-/// has t = +inf, prim = kInvalidPrim (see reset). Kernels write only lanes that hit
-/// something nearer than the lane's current t.
+/// Closest-hit answers of K rays in SoA form, 64-byte aligned, the fields of Hit per lane.
+/// A lane with no hit yet has t = +inf, prim = kInvalidPrim, geom = inst = kInvalidId (see
+/// reset). Only lanes that hit something nearer than the lane's current t are written.
 template <int K>
 struct alignas(64) HitPacket {
   static_assert(K == 4 || K == 8 || K == 16, "K rays per packet: 4, 8 or 16");
   float t[K];               // 4K bytes
   float u[K];               // 4K bytes
   float v[K];               // 4K bytes
-  std::uint32_t prim[K];    // 4K bytes
+  std::uint32_t prim[K];    // 4K bytes: primitive within its geometry
+  std::uint32_t geom[K];    // 4K bytes: geometry id
+  std::uint32_t inst[K];    // 4K bytes: instance id
 };
-static_assert(sizeof(HitPacket<4>) == 64, "HitPacket<4>: 16 B per lane");
-static_assert(sizeof(HitPacket<8>) == 128, "HitPacket<8>: 16 B per lane");
-static_assert(sizeof(HitPacket<16>) == 256, "HitPacket<16>: 16 B per lane");
+static_assert(sizeof(HitPacket<4>) == 128, "HitPacket<4>: 24 B per lane, padded to 64 B");
+static_assert(sizeof(HitPacket<8>) == 192, "HitPacket<8>: 24 B per lane");
+static_assert(sizeof(HitPacket<16>) == 384, "HitPacket<16>: 24 B per lane");
 
 /// Bits of the first `count` lanes (count in [0, 32]).
 constexpr std::uint32_t lane_bits(int count) {
@@ -82,20 +84,29 @@ Ray ray_of(const RayPacket<K>& packet, int i) {
              {packet.dx[i], packet.dy[i], packet.dz[i]}, packet.tmax[i]};
 }
 
-/// Sets every lane to "no hit yet": t = +inf, u = v = 0, prim = kInvalidPrim.
+/// Sets every lane to "no hit yet": t = +inf, u = v = 0, prim = kInvalidPrim,
+/// geom = inst = kInvalidId.
 template <int K>
 void reset(HitPacket<K>& hits) {
   for (int i = 0; i < K; ++i) {
     hits.t[i] = std::numeric_limits<float>::infinity();
     hits.u[i] = hits.v[i] = 0.0f;
     hits.prim[i] = kInvalidPrim;
+    hits.geom[i] = hits.inst[i] = kInvalidId;
   }
 }
 
 /// Lane i of a hit packet as an AoS hit.
 template <int K>
 Hit hit_of(const HitPacket<K>& hits, int i) {
-  return Hit{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
+  return Hit{hits.t[i], hits.u[i], hits.v[i], hits.prim[i], hits.geom[i], hits.inst[i]};
+}
+
+/// Writes `hit` into lane i of a hit packet.
+template <int K>
+void set_hit(HitPacket<K>& hits, int i, const Hit& hit) {
+  hits.t[i] = hit.t, hits.u[i] = hit.u, hits.v[i] = hit.v;
+  hits.prim[i] = hit.prim, hits.geom[i] = hit.geom, hits.inst[i] = hit.inst;
 }
 
 /// Stores lanes 0 .. count of `hits` to out[0 .. count).

@@ -8,6 +8,9 @@ namespace volley {
 
 /// Prim id reported for a miss.
 inline constexpr std::uint32_t kInvalidPrim = 0xffffffffu;
+/// Geometry id of a miss, and instance id of a miss or of a hit not made through an
+/// instance.
+inline constexpr std::uint32_t kInvalidId = 0xffffffffu;
 
 /// One ray: r(t) = org + t * dir, searched over tmin <= t < tmax.
 /// The direction need not be normalized; t is in units of |dir|.
@@ -21,17 +24,21 @@ struct Ray {
 static_assert(sizeof(Ray) == 32, "Ray is a .vray record");
 
 /// Closest-hit answer: t along the ray, barycentrics (u, v) of the hit relative to the
-/// triangle's second and third vertex (p = (1-u-v) p0 + u p1 + v p2), and the prim id
-/// the primitive was given when added. A miss has t = +inf and prim = kInvalidPrim.
-/// Polygons report u = v = 0. Same layout as a `.vhit` record (16 bytes).
+/// triangle's second and third vertex (p = (1-u-v) p0 + u p1 + v p2), the geometry hit
+/// (the id its add_triangles / add_polygon call returned) and the primitive's index within
+/// it (triangle i of that call; 0 for a polygon), as Embree's geomID and primID. A miss has
+/// t = +inf, prim = kInvalidPrim and geom = kInvalidId. Polygons report u = v = 0. Same
+/// layout as a `.vhit` record (24 bytes).
 struct Hit {
   float t = std::numeric_limits<float>::infinity();  ///< distance in units of |dir| (4 bytes)
   float u = 0.0f;                                     ///< barycentric weight of the second vertex (4 bytes)
   float v = 0.0f;                                     ///< barycentric weight of the third vertex (4 bytes)
-  std::uint32_t prim = kInvalidPrim;                  ///< prim id, kInvalidPrim for a miss (4 bytes)
+  std::uint32_t prim = kInvalidPrim;                  ///< primitive within its geometry; kInvalidPrim: a miss (4 bytes)
+  std::uint32_t geom = kInvalidId;                    ///< geometry id; kInvalidId for a miss (4 bytes)
+  std::uint32_t inst = kInvalidId;                    ///< instance id; kInvalidId when not through an instance (4 bytes)
   /// True for a hit, false for a miss.
   bool hit() const { return prim != kInvalidPrim; }
 };
-static_assert(sizeof(Hit) == 16, "Hit is a .vhit record");
+static_assert(sizeof(Hit) == 24, "Hit is a .vhit record");
 
 }  // namespace volley

@@ -19,8 +19,12 @@
  *   tmax, tmin >= tmax, or a zero direction (dx = dy = dz = 0) is answered as a miss
  *   (never hit, never occluded); this is not an error. volley_validate_rays reports such
  *   rays for callers who want to know.
- * - Primitive ids: every triangle and polygon gets the next id in order of addition,
- *   starting at 0; a hit reports it in `prim`, a miss VOLLEY_INVALID_PRIM. */
+ * - Geometries: every volley_scene_add_triangles / volley_scene_add_polygon call creates
+ *   a geometry, numbered 0, 1, 2, ... in order of addition. A hit reports the geometry in
+ *   `geom` and the primitive's index within it in `prim` (triangle i of the call; 0 for a
+ *   polygon), as Embree's geomID and primID; a miss has prim = VOLLEY_INVALID_PRIM and
+ *   geom = VOLLEY_INVALID_ID. `inst` is VOLLEY_INVALID_ID for a hit not made through an
+ *   instance. */
 #ifndef VOLLEY_VOLLEY_H
 #define VOLLEY_VOLLEY_H
 
@@ -41,6 +45,8 @@ extern "C" {
 
 /** prim of a miss (and of hit-packet lanes with no hit yet). */
 #define VOLLEY_INVALID_PRIM 0xffffffffu
+/** geom of a miss; inst of a miss or of a hit not made through an instance. */
+#define VOLLEY_INVALID_ID 0xffffffffu
 
 /** Alignment of the packet structs below: 64 bytes (one cache line, any SIMD width).
  *  Stack variables of those types get it from the compiler; heap memory must come from
@@ -98,7 +104,9 @@ typedef struct volley_hit {
   float t;       /**< distance along the ray in units of |dir|; +inf for a miss */
   float u;       /**< barycentric weight of the second vertex; 0 for a miss */
   float v;       /**< barycentric weight of the third vertex; 0 for a miss */
-  uint32_t prim; /**< id of the primitive hit; VOLLEY_INVALID_PRIM for a miss */
+  uint32_t prim; /**< the primitive's index within its geometry; VOLLEY_INVALID_PRIM for a miss */
+  uint32_t geom; /**< the geometry hit; VOLLEY_INVALID_ID for a miss */
+  uint32_t inst; /**< the instance hit through; VOLLEY_INVALID_ID for none */
 } volley_hit;
 
 /** 4 rays in structure-of-arrays form (192 bytes, 64-byte aligned; the layout of
@@ -130,30 +138,36 @@ typedef struct VOLLEY_ALIGN64 volley_ray_packet16 {
   uint32_t reserved[15];        /**< padding to the next 64 bytes; not read */
 } volley_ray_packet16;
 
-/** Closest hits of 4 rays (64 bytes, 64-byte aligned; volley::HitPacket<4>). Lane i
+/** Closest hits of 4 rays (128 bytes, 64-byte aligned; volley::HitPacket<4>). Lane i
  *  means what volley_hit means; before a query, reset it (volley_reset_hits4) or leave an
  *  earlier answer there to bound the search. */
 typedef struct VOLLEY_ALIGN64 volley_hit_packet4 {
   float t[4];       /**< distances; +inf: no hit */
   float u[4];       /**< barycentric u */
   float v[4];       /**< barycentric v */
-  uint32_t prim[4]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t prim[4]; /**< primitives within their geometries; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t geom[4]; /**< geometries; VOLLEY_INVALID_ID: no hit */
+  uint32_t inst[4]; /**< instances; VOLLEY_INVALID_ID: none */
 } volley_hit_packet4;
 
-/** Closest hits of 8 rays (128 bytes; volley::HitPacket<8>). As volley_hit_packet4. */
+/** Closest hits of 8 rays (192 bytes; volley::HitPacket<8>). As volley_hit_packet4. */
 typedef struct VOLLEY_ALIGN64 volley_hit_packet8 {
   float t[8];       /**< distances; +inf: no hit */
   float u[8];       /**< barycentric u */
   float v[8];       /**< barycentric v */
-  uint32_t prim[8]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t prim[8]; /**< primitives within their geometries; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t geom[8]; /**< geometries; VOLLEY_INVALID_ID: no hit */
+  uint32_t inst[8]; /**< instances; VOLLEY_INVALID_ID: none */
 } volley_hit_packet8;
 
-/** Closest hits of 16 rays (256 bytes; volley::HitPacket<16>). As volley_hit_packet4. */
+/** Closest hits of 16 rays (384 bytes; volley::HitPacket<16>). As volley_hit_packet4. */
 typedef struct VOLLEY_ALIGN64 volley_hit_packet16 {
   float t[16];       /**< distances; +inf: no hit */
   float u[16];       /**< barycentric u */
   float v[16];       /**< barycentric v */
-  uint32_t prim[16]; /**< primitive ids; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t prim[16]; /**< primitives within their geometries; VOLLEY_INVALID_PRIM: no hit */
+  uint32_t geom[16]; /**< geometries; VOLLEY_INVALID_ID: no hit */
+  uint32_t inst[16]; /**< instances; VOLLEY_INVALID_ID: none */
 } volley_hit_packet16;
 
 /** Facts about a committed scene (a subset of volley::AccelInfo). */
@@ -170,6 +184,8 @@ typedef struct volley_scene_info {
   int block_width;           /**< triangles per leaf block (SIMD lanes) */
   volley_triangle_test test; /**< the test in use */
   volley_isa isa;            /**< the ISA in use (never VOLLEY_ISA_AUTO) */
+  size_t geometries;         /**< geometries added */
+  size_t disabled;           /**< geometries left out at the last commit */
 } volley_scene_info;
 
 /** A scene: triangles and polygons plus the acceleration structure built over them.
@@ -200,29 +216,41 @@ VOLLEY_API volley_status volley_scene_create(volley_scene** out);
  *  the scene may be running. */
 VOLLEY_API void volley_scene_destroy(volley_scene* scene);
 
-/** Adds an indexed triangle mesh and copies it: the caller may free or reuse `xyz` and
- *  `indices` as soon as the call returns. `xyz` holds 3 * vertex_count floats (x, y, z
- *  of each vertex), `indices` 3 * triangle_count vertex indices (0-based). The triangles
- *  get consecutive prim ids; the first is stored in *first_prim when first_prim is not
- *  NULL. Zero-area triangles are accepted and never hit. The scene must be committed
- *  again before the next query.
+/** Adds an indexed triangle mesh as a new geometry and copies it: the caller may free or
+ *  reuse `xyz` and `indices` as soon as the call returns. `xyz` holds 3 * vertex_count
+ *  floats (x, y, z of each vertex), `indices` 3 * triangle_count vertex indices
+ *  (0-based). The geometry's id is stored in *geometry when geometry is not NULL; a hit on
+ *  its triangle i reports geom = that id and prim = i. Zero-area triangles are accepted
+ *  and never hit. The scene must be committed again before the next query.
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene, a NULL array with a non-zero
  *  count, or more primitives than prim ids (2^32 - 1 in all);
  *  VOLLEY_ERROR_INVALID_GEOMETRY for a NaN or infinite coordinate (of any vertex, used
  *  or not) or an index >= vertex_count. Nothing is added on error. */
 VOLLEY_API volley_status volley_scene_add_triangles(volley_scene* scene, const float* xyz, size_t vertex_count,
                                                     const uint32_t* indices, size_t triangle_count,
-                                                    uint32_t* first_prim);
+                                                    uint32_t* geometry);
 
 /** Adds one planar polygon (convex or concave, vertex_count >= 3 vertices in order around
- *  its boundary, 3 * vertex_count floats) and copies it. Its prim id is stored in *prim
- *  when prim is not NULL. Hits on polygons report u = v = 0.
+ *  its boundary, 3 * vertex_count floats) as a new geometry and copies it. The geometry's
+ *  id is stored in *geometry when geometry is not NULL. Hits on polygons report prim = 0
+ *  and u = v = 0.
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or xyz, or too many
  *  primitives; VOLLEY_ERROR_INVALID_GEOMETRY for fewer than 3 vertices, a non-finite
  *  coordinate, a polygon that is not planar (within 1e-4 of its size) or has zero area.
  *  Nothing is added on error. */
 VOLLEY_API volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, size_t vertex_count,
-                                                  uint32_t* prim);
+                                                  uint32_t* geometry);
+
+/** Leaves a geometry out of the scene from the next commit on (as Embree's
+ *  rtcDisableGeometry): nothing of it is hit. Its data stays; volley_scene_enable_geometry
+ *  brings it back. The scene must be committed again before the next query.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
+VOLLEY_API volley_status volley_scene_disable_geometry(volley_scene* scene, uint32_t geometry);
+
+/** Brings a disabled geometry back from the next commit on (nothing changes for an
+ *  enabled one, but the scene must still be committed again).
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
+VOLLEY_API volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometry);
 
 /** Builds the acceleration structure with the given test and ISA (VOLLEY_TEST_WATERTIGHT
  *  and VOLLEY_ISA_AUTO are the defaults of volley trace and volley render). May be called

@@ -110,9 +110,11 @@ inline std::vector<Hit> brute_force_all(const Soup& soup, TriangleTest test, con
   return out;
 }
 
-/// Same answer: the same prim, or both hits at the same t (a tie between triangles).
+/// Same answer: the same primitive of the same geometry (and instance), or both hits at
+/// the same t (a tie between triangles).
 inline bool agree(const Hit& got, const Hit& want) {
-  return got.prim == want.prim ? (!got.hit() || got.t == want.t) : (got.hit() && want.hit() && got.t == want.t);
+  const bool same = got.prim == want.prim && got.geom == want.geom && got.inst == want.inst;
+  return same ? (!got.hit() || got.t == want.t) : (got.hit() && want.hit() && got.t == want.t);
 }
 
 /// Counts disagreements of every query form of `accel` with `want` (per ray), and checks
@@ -146,7 +148,7 @@ inline void check_packets(const Accel& accel, const std::vector<Ray>& rays, cons
       if ((p.active >> i) & 1u) continue;
       p.ox[i] = p.dy[i] = kNaN, p.oy[i] = 1e30f, p.oz[i] = -kInf, p.dx[i] = 0.0f, p.dz[i] = 1.0f;
       p.tmin[i] = -kInf, p.tmax[i] = kInf;
-      h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu;
+      h.t[i] = 12345.0f, h.prim[i] = 0xdeadbeefu, h.geom[i] = 0xabad1deau, h.inst[i] = 0x0ddba11u;
       const std::uint32_t snan = 0x7f800001u, ones = 0xffffffffu;
       std::memcpy(&h.u[i], &snan, 4);
       std::memcpy(&h.v[i], &ones, 4);
@@ -158,7 +160,7 @@ inline void check_packets(const Accel& accel, const std::vector<Ray>& rays, cons
       if (!((p.active >> i) & 1u)) {
         f.inactive_written += std::memcmp(&h.t[i], &before.t[i], 4) != 0 || std::memcmp(&h.u[i], &before.u[i], 4) != 0 ||
                               std::memcmp(&h.v[i], &before.v[i], 4) != 0 || h.prim[i] != before.prim[i] ||
-                              ((mask >> i) & 1u);
+                              h.geom[i] != before.geom[i] || h.inst[i] != before.inst[i] || ((mask >> i) & 1u);
         continue;
       }
       ++f.lanes;

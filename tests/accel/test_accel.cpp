@@ -13,6 +13,8 @@
 using volley::Accel;
 using volley::Hit;
 using volley::Ray;
+using volley::Isa;
+using volley::TriangleTest;
 
 namespace {
 
@@ -39,7 +41,7 @@ TEST_CASE("accel: bad input is rejected with a message") {
   CHECK_THROWS_WITH_AS(fresh.intersect(make_ray({0, 0, 0}, {0, 0, 1})), doctest::Contains("commit"), volley::Error);
 }
 
-TEST_CASE("accel: prim ids run across additions, and the closest of triangles and polygons wins") {
+TEST_CASE("accel: each add call is a geometry, hits name it and the primitive within it, and the closest of triangles and polygons wins") {
   for (auto test : kTests) {
     CAPTURE(std::string(volley::to_string(test)));
     Accel accel;
@@ -48,16 +50,21 @@ TEST_CASE("accel: prim ids run across additions, and the closest of triangles an
     const std::uint32_t idx[] = {0, 1, 2, 3, 4, 5};
     CHECK(accel.add_triangles(tris, 6, idx, 2) == 0);
     const float square[] = {-2, -2, 4, 2, -2, 4, 2, 2, 4, -2, 2, 4};
-    CHECK(accel.add_polygon(square, 4) == 2);
+    CHECK(accel.add_polygon(square, 4) == 1);
     accel.commit({test, volley::Isa::scalar});
     Hit h = accel.intersect(make_ray({0, 0, 0}, {0, 0, 1}));
+    CHECK(h.geom == 0);
     CHECK(h.prim == 1);
+    CHECK(h.inst == volley::kInvalidId);
     CHECK(h.t == doctest::Approx(3.0f));
     h = accel.intersect(make_ray({0, 0, 0}, {0, 0, 1}, 3.5f));
-    CHECK(h.prim == 2);
+    CHECK(h.geom == 1);
+    CHECK(h.prim == 0);
     CHECK(h.t == doctest::Approx(4.0f));
     h = accel.intersect(make_ray({1.5f, 1.5f, 0}, {0, 0, 1}));  // outside the triangles
-    CHECK(h.prim == 2);
+    CHECK(h.geom == 1);
+    CHECK(h.prim == 0);
+    CHECK(accel.intersect(make_ray({5, 5, 0}, {0, 0, 1})).geom == volley::kInvalidId);
     CHECK(!accel.intersect(make_ray({5, 5, 0}, {0, 0, 1})).hit());
     CHECK(accel.occluded(make_ray({0, 0, 0}, {0, 0, 1})));
     CHECK(!accel.occluded(make_ray({0, 0, 0}, {0, 0, 1}, 0.0f, 3.0f)));  // half-open: t = 3 excluded
@@ -65,6 +72,65 @@ TEST_CASE("accel: prim ids run across additions, and the closest of triangles an
     const auto info = accel.info();
     CHECK(info.triangles == 2);
     CHECK(info.polygons == 1);
+    CHECK(info.geometries == 2);
+  }
+}
+
+TEST_CASE("accel: empty geometries take an id and are never reported") {
+  const float tris[] = {-1, -1, 5, 1, -1, 5, 0, 1, 5, -1, -1, 3, 1, -1, 3, 0, 1, 3};
+  const std::uint32_t first[] = {0, 1, 2}, second[] = {3, 4, 5};
+  for (Isa isa : {Isa::scalar, Isa::avx2}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    Accel accel;
+    CHECK(accel.add_triangles(tris, 6, first, 0) == 0);
+    CHECK(accel.add_triangles(tris, 6, first, 1) == 1);
+    CHECK(accel.add_triangles(tris, 6, first, 0) == 2);
+    CHECK(accel.add_triangles(tris, 6, second, 1) == 3);
+    accel.commit({TriangleTest::watertight, isa});
+    const Hit near = accel.intersect(make_ray({0, 0, 0}, {0, 0, 1}));
+    CHECK(near.geom == 3);
+    CHECK(near.prim == 0);
+    const Hit far = accel.intersect(make_ray({0, 0, 0}, {0, 0, 1}, 4.0f));
+    CHECK(far.geom == 1);
+    CHECK(far.prim == 0);
+    CHECK(accel.info().geometries == 4);
+  }
+}
+
+TEST_CASE("accel: a disabled geometry is left out from the next commit until it is enabled again") {
+  const float tris[] = {-1, -1, 5, 1, -1, 5, 0, 1, 5, -1, -1, 3, 1, -1, 3, 0, 1, 3};
+  const std::uint32_t first[] = {0, 1, 2}, second[] = {3, 4, 5};
+  const float square[] = {-2, -2, 4, 2, -2, 4, 2, 2, 4, -2, 2, 4};
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel accel;
+    CHECK(accel.add_triangles(tris, 6, first, 1) == 0);   // z = 5
+    CHECK(accel.add_triangles(tris, 6, second, 1) == 1);  // z = 3
+    CHECK(accel.add_polygon(square, 4) == 2);             // z = 4
+    const Ray up = make_ray({0, 0, 0}, {0, 0, 1});
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.intersect(up).geom == 1);
+    CHECK(accel.intersect(up).prim == 0);  // the index within geometry 1, not scene-wide
+    accel.disable_geometry(1);
+    CHECK_THROWS_WITH_AS(accel.intersect(up), doctest::Contains("commit"), volley::Error);
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.intersect(up).geom == 2);
+    CHECK(accel.info().disabled == 1);
+    accel.disable_geometry(2);
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.intersect(up).geom == 0);
+    accel.disable_geometry(0);
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(!accel.intersect(up).hit());
+    CHECK(!accel.occluded(up));
+    accel.enable_geometry(1);
+    accel.enable_geometry(1);  // enabling an enabled geometry changes nothing
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.intersect(up).geom == 1);
+    CHECK(accel.info().disabled == 2);
+    CHECK_THROWS_WITH_AS(accel.disable_geometry(3), doctest::Contains("geometry 3 does not exist"), volley::Error);
+    CHECK_THROWS_WITH_AS(accel.enable_geometry(0xffffffffu), doctest::Contains("does not exist"), volley::Error);
   }
 }
 

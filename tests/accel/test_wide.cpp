@@ -309,7 +309,7 @@ TEST_CASE("wide: empty scenes, one triangle, degenerate-only scenes") {
 }
 
 TEST_CASE("wide: packets and streams see polygons as single rays do") {
-  // Two triangles at z = 5 and z = 3, a square polygon at z = 4 (prim ids 0, 1, 2).
+  // Two triangles at z = 5 and z = 3 (geometry 0), a square polygon at z = 4 (geometry 1).
   const float tris[] = {-1, -1, 5, 1, -1, 5, 0, 1, 5, -1, -1, 3, 1, -1, 3, 0, 1, 3};
   const std::uint32_t idx[] = {0, 1, 2, 3, 4, 5};
   const float square[] = {-2, -2, 4, 2, -2, 4, 2, 2, 4, -2, 2, 4};
@@ -328,7 +328,7 @@ TEST_CASE("wide: packets and streams see polygons as single rays do") {
       accel.commit({test, isa});
       std::vector<Hit> want(rays.size());
       std::size_t polygon_hits = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) polygon_hits += (want[i] = accel.intersect(rays[i])).prim == 2;
+      for (std::size_t i = 0; i < rays.size(); ++i) polygon_hits += (want[i] = accel.intersect(rays[i])).geom == 1;
       CHECK(polygon_hits > 5);
       report(check_forms(accel, rays, want, 13), std::string("polygons ") + std::string(volley::to_string(test)));
     }

@@ -44,14 +44,14 @@ void add_scene(volley::Accel& accel) {
   const std::uint32_t floor = accel.add_triangles(kFloorXyz, 4, kFloorIndices, 2);
   const std::uint32_t table = accel.add_triangles(kTableXyz, 4, kTableIndices, 2);
   const std::uint32_t polygon = accel.add_polygon(kPolygonXyz, 6);
-  check(floor == 0 && table == 2 && polygon == 4, "prim ids 0, 2, 4");
+  check(floor == 0 && table == 1 && polygon == 2, "geometry ids 0, 1, 2");
 }
 
 /// The hit point from (u, v) is the ray's point at t (triangles only).
 bool barycentrics_fit(const volley::Ray& r, const volley::Hit& h) {
-  if (h.prim >= 4) return h.u == 0.0f && h.v == 0.0f;
-  const float* xyz = h.prim < 2 ? kFloorXyz : kTableXyz;
-  const std::uint32_t* idx = (h.prim < 2 ? kFloorIndices : kTableIndices) + 3 * (h.prim % 2);
+  if (h.geom == 2) return h.u == 0.0f && h.v == 0.0f;
+  const float* xyz = h.geom == 0 ? kFloorXyz : kTableXyz;
+  const std::uint32_t* idx = (h.geom == 0 ? kFloorIndices : kTableIndices) + 3 * h.prim;
   for (int k = 0; k < 3; ++k) {
     const float p = (1 - h.u - h.v) * xyz[3 * idx[0] + k] + h.u * xyz[3 * idx[1] + k] + h.v * xyz[3 * idx[2] + k];
     if (std::fabs(p - (r.org[k] + h.t * r.dir[k])) > 1e-4f) return false;
@@ -103,9 +103,10 @@ void check_accel(volley::TriangleTest test, volley::Isa isa) {
     float t;
     const volley_ray r = scene_ray(int(i));
     const std::uint32_t prim = scene_expected_prim(&r, &t);
-    check(single[i].prim == prim && scene_t_close(single[i].t, t),
-          label + " ray " + std::to_string(i) + ": prim " + std::to_string(single[i].prim) + " t " +
-              std::to_string(single[i].t) + ", expected prim " + std::to_string(prim) + " t " + std::to_string(t));
+    check(single[i].prim == scene_local(prim) && single[i].geom == scene_geometry(prim) && scene_t_close(single[i].t, t),
+          label + " ray " + std::to_string(i) + ": geom " + std::to_string(single[i].geom) + " prim " +
+              std::to_string(single[i].prim) + " t " + std::to_string(single[i].t) + ", expected scene primitive " +
+              std::to_string(prim) + " t " + std::to_string(t));
     check(!single[i].hit() || barycentrics_fit(rays[i], single[i]), label + " barycentrics of ray " + std::to_string(i));
     check(accel.occluded(rays[i]) == single[i].hit(), label + " occluded ray " + std::to_string(i));
     // Occlusion is bounded by tmax: below the polygon only the polygon can block.
@@ -182,7 +183,9 @@ void check_c_api_threads() {
         volley_hit h;
         float expected_t;
         const uint32_t prim = scene_expected_prim(&r, &expected_t);
-        if (volley_intersect1(scene, &r, &h) != VOLLEY_OK || h.prim != prim) ++wrong[t];
+        if (volley_intersect1(scene, &r, &h) != VOLLEY_OK || h.prim != scene_local(prim) ||
+            h.geom != scene_geometry(prim))
+          ++wrong[t];
       }
     });
   }

@@ -59,6 +59,12 @@ static inline uint32_t scene_expected_prim(const volley_ray* r, float* t) {
   return VOLLEY_INVALID_PRIM;
 }
 
+/* The geometry and the index within it of a scene_expected_prim number: the floor's
+ * triangles are 0 and 1 (geometry 0), the table's 2 and 3 (geometry 1), the polygon 4
+ * (geometry 2). */
+static inline uint32_t scene_geometry(uint32_t id) { return id == VOLLEY_INVALID_PRIM ? VOLLEY_INVALID_ID : id / 2; }
+static inline uint32_t scene_local(uint32_t id) { return id == VOLLEY_INVALID_PRIM ? id : id % 2; }
+
 /* 1 when a hit's t is the exact `expected` within rounding (the tests compute t in
  * different ways, none of them exactly). */
 static inline int scene_t_close(float t, float expected) {

@@ -68,8 +68,10 @@ static void read_obj(const char* file, float** xyz, size_t* nv, uint32_t** indic
   fclose(f);
 }
 
-/* Records of a .vray or .vhit file: 4-byte magic, u32 version 1, u64 count, records. */
-static void* read_records(const char* file, const char* magic, size_t record_bytes, size_t* count) {
+/* Records of a .vray or .vhit file: 4-byte magic, u32 version (.vray 1, .vhit 2), u64
+ * count, records. */
+static void* read_records(const char* file, const char* magic, uint32_t want_version, size_t record_bytes,
+                          size_t* count) {
   unsigned char header[16];
   uint64_t n;
   uint32_t version;
@@ -79,7 +81,7 @@ static void* read_records(const char* file, const char* magic, size_t record_byt
   if (fread(header, 1, 16, f) != 16 || memcmp(header, magic, 4) != 0) die("not a volley ray/hit file", file);
   memcpy(&version, header + 4, 4);
   memcpy(&n, header + 8, 8);
-  if (version != 1) die("unknown version", file);
+  if (version != want_version) die("unknown version", file);
   data = malloc(n ? n * record_bytes : 1);
   if (!data || fread(data, record_bytes, n, f) != n) die("truncated file", file);
   fclose(f);
@@ -92,14 +94,15 @@ static int mismatches = 0;
 static void compare(const char* mode, size_t i, const volley_hit* got, const volley_hit* expected) {
   if (memcmp(got, expected, sizeof *got) == 0) return;
   if (++mismatches <= 10)
-    printf("%s ray %zu: t %.9g u %.9g v %.9g prim %u, volley trace: t %.9g u %.9g v %.9g prim %u\n", mode, i, got->t,
-           got->u, got->v, got->prim, expected->t, expected->u, expected->v, expected->prim);
+    printf("%s ray %zu: t %.9g u %.9g v %.9g prim %u geom %u, volley trace: t %.9g u %.9g v %.9g prim %u geom %u\n",
+           mode, i, got->t, got->u, got->v, got->prim, got->geom, expected->t, expected->u, expected->v, expected->prim,
+           expected->geom);
 }
 
 /* The .vhit record of an occlusion answer (as volley trace --occluded writes it). */
 static volley_hit occlusion_record(int blocked) {
-  volley_hit h = {INFINITY, 0.0f, 0.0f, VOLLEY_INVALID_PRIM};
-  if (blocked) h.t = 0.0f, h.prim = 0;
+  volley_hit h = {INFINITY, 0.0f, 0.0f, VOLLEY_INVALID_PRIM, VOLLEY_INVALID_ID, VOLLEY_INVALID_ID};
+  if (blocked) h.t = 0.0f, h.prim = 0, h.geom = 0;
   return h;
 }
 
@@ -127,7 +130,8 @@ static volley_hit occlusion_record(int blocked) {
         die(volley_last_error(), NULL);                                                               \
       for (l = 0; l < n; ++l) {                                                                       \
         volley_hit h = occlusion_record((blocked >> l) & 1u);                                         \
-        if (!occluded) h.t = hits.t[l], h.u = hits.u[l], h.v = hits.v[l], h.prim = hits.prim[l];      \
+        if (!occluded) h.t = hits.t[l], h.u = hits.u[l], h.v = hits.v[l], h.prim = hits.prim[l],      \
+                       h.geom = hits.geom[l], h.inst = hits.inst[l];                                  \
         compare("packet" #K, i + l, &h, &expected[i + l]);                                            \
       }                                                                                               \
     }                                                                                                 \
@@ -167,8 +171,8 @@ int main(int argc, char** argv) {
     else die("unknown argument", argv[a]);
   }
   read_obj(argv[1], &xyz, &nv, &indices, &nt);
-  rays = (volley_ray*)read_records(argv[2], "VRAY", sizeof(volley_ray), &nrays);
-  expected = (volley_hit*)read_records(argv[3], "VHIT", sizeof(volley_hit), &nhits);
+  rays = (volley_ray*)read_records(argv[2], "VRAY", 1, sizeof(volley_ray), &nrays);
+  expected = (volley_hit*)read_records(argv[3], "VHIT", 2, sizeof(volley_hit), &nhits);
   if (nrays != nhits) die("the ray and hit files differ in length", NULL);
 
   if (volley_scene_create(&scene) != VOLLEY_OK || volley_scene_add_triangles(scene, xyz, nv, indices, nt, NULL) != VOLLEY_OK ||

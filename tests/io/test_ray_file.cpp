@@ -76,15 +76,45 @@ TEST_CASE("ray file: the bytes are the documented little-endian layout") {
 
 TEST_CASE("hit file: the bytes are the documented little-endian layout, a miss is inf / 0xffffffff") {
   TempDir dir;
-  const std::vector<Hit> hits = {Hit{2.5f, 0.25f, 0.5f, 7}, Hit{}};
+  const std::vector<Hit> hits = {Hit{2.5f, 0.25f, 0.5f, 7, 3, volley::kInvalidId}, Hit{}};
   const auto path = dir.path() / "two.vhit";
   write_hits(path, hits);
   const std::string bytes = file_bytes(path);
-  REQUIRE(bytes.size() == 16 + 2 * 16);
-  CHECK(bytes.substr(0, 16) == header("VHIT", 1, 2));
-  CHECK(bytes.substr(16 + 12, 4) == std::string("\x07\x00\x00\x00", 4));
-  CHECK(bytes.substr(32, 4) == std::string("\x00\x00\x80\x7f", 4));  // +inf
-  CHECK(bytes.substr(32 + 12, 4) == std::string("\xff\xff\xff\xff", 4));
+  REQUIRE(bytes.size() == 16 + 2 * 24);
+  CHECK(bytes.substr(0, 16) == header("VHIT", 2, 2));
+  CHECK(bytes.substr(16 + 12, 4) == std::string("\x07\x00\x00\x00", 4));  // prim
+  CHECK(bytes.substr(16 + 16, 4) == std::string("\x03\x00\x00\x00", 4));  // geom
+  CHECK(bytes.substr(16 + 20, 4) == std::string("\xff\xff\xff\xff", 4));  // inst: none
+  CHECK(bytes.substr(40, 4) == std::string("\x00\x00\x80\x7f", 4));       // +inf
+  CHECK(bytes.substr(40 + 12, 12) == std::string(12, '\xff'));             // prim, geom, inst of a miss
+}
+
+TEST_CASE("hit file: version 1 (16-byte records, scene-wide prim ids) still reads, as geometry 0") {
+  TempDir dir;
+  const auto path = dir.path() / "old.vhit";
+  std::string bytes = header("VHIT", 1, 2);
+  const float hit_t = 2.5f, u = 0.25f, v = 0.5f, inf = kInf;
+  const std::uint32_t prim = 7, miss = 0xffffffffu, zero = 0;
+  for (const void* p : {static_cast<const void*>(&hit_t), static_cast<const void*>(&u),
+                        static_cast<const void*>(&v), static_cast<const void*>(&prim)})
+    bytes.append(static_cast<const char*>(p), 4);
+  for (const void* p : {static_cast<const void*>(&inf), static_cast<const void*>(&zero),
+                        static_cast<const void*>(&zero), static_cast<const void*>(&miss)})
+    bytes.append(static_cast<const char*>(p), 4);
+  std::ofstream(path, std::ios::binary) << bytes;
+  const std::vector<Hit> hits = read_hits(path);
+  REQUIRE(hits.size() == 2);
+  CHECK(hits[0].t == 2.5f);
+  CHECK(hits[0].prim == 7);
+  CHECK(hits[0].geom == 0);
+  CHECK(hits[0].inst == volley::kInvalidId);
+  CHECK(!hits[1].hit());
+  CHECK(hits[1].geom == volley::kInvalidId);
+  // A version-1 header with version-2 sized records is caught by the size check.
+  std::ofstream(path, std::ios::binary) << header("VHIT", 1, 1) << std::string(24, '\0');
+  CHECK_THROWS_WITH_AS(read_hits(path), doctest::Contains("unexpected bytes"), volley::io::LoadError);
+  std::ofstream(path, std::ios::binary) << header("VHIT", 3, 0);
+  CHECK_THROWS_WITH_AS(read_hits(path), doctest::Contains("version 3 (expected 2 or 1)"), volley::io::LoadError);
 }
 
 TEST_CASE("ray and hit files: round trips keep every bit") {

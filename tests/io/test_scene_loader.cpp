@@ -360,3 +360,23 @@ TEST_CASE("scene: missing shared folder, errors inside a referenced mesh") {
                                 ":4:7: vertex index 7 is out of range: the file has 3 vertices");
   }
 }
+
+TEST_CASE("scene: each object of triangles is recorded with its run of the merged mesh") {
+  TempDir dir;
+  const auto file = dir.write("objects.json", R"({
+    "objects": [
+      {"type": "triangles", "name": "first", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]},
+      {"type": "polygon", "vertices": [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]},
+      {"type": "triangles", "vertices": [[0, 0, 2], [1, 0, 2], [0, 1, 2], [1, 1, 2], [2, 1, 2], [1, 2, 2]]}
+    ]
+  })");
+  const SceneDesc s = load_scene(file, {});
+  REQUIRE(s.mesh.objects.size() == 2);
+  CHECK(s.mesh.objects[0].name == "first");
+  CHECK(s.mesh.objects[0].first_triangle == 0);
+  CHECK(s.mesh.objects[0].triangle_count == 1);
+  CHECK(s.mesh.objects[1].name.find("objects[2]") != std::string::npos);
+  CHECK(s.mesh.objects[1].first_triangle == 1);
+  CHECK(s.mesh.objects[1].triangle_count == 2);
+  CHECK(s.polygons.size() == 1);
+}

@@ -192,3 +192,37 @@ TEST_CASE("render: next_float is std::nextafter toward +-inf") {
           std::bit_cast<std::uint32_t>(std::nextafter(x, -kInf)));
   }
 }
+
+TEST_CASE("render: each scene object is a geometry, and a hit on one shades with its own material") {
+  // Three objects of one triangle each at z = 1, 2, 3, one material each, then a polygon
+  // at z = 0.5: geometries 0, 1, 2 (objects) and 3 (the polygon).
+  io::SceneDesc desc;
+  for (int k = 0; k < 3; ++k) {
+    const float z = float(k + 1);
+    desc.mesh.positions.insert(desc.mesh.positions.end(), {{-1, -1, z}, {1, -1, z}, {0, 1, z}});
+    const auto b = static_cast<std::uint32_t>(3 * k);
+    desc.mesh.indices.insert(desc.mesh.indices.end(), {b, b + 1, b + 2});
+    desc.mesh.material.push_back(static_cast<std::uint32_t>(k));
+    desc.mesh.objects.push_back({"object " + std::to_string(k), static_cast<std::size_t>(k), 1});
+    desc.materials.push_back(io::Material{"m" + std::to_string(k)});
+  }
+  desc.materials.push_back(io::Material{"polygon"});
+  desc.polygons.push_back({"square", {{5, 5, 0.5f}, {6, 5, 0.5f}, {6, 6, 0.5f}, {5, 6, 0.5f}}, 3});
+  const render::Scene scene(desc, 8, 8, Options{});
+  CHECK(scene.accel().info().geometries == 4);
+  for (int k = 0; k < 3; ++k) {
+    CAPTURE(k);
+    const Ray ray{{0, 0, 0}, 0.5f + float(k), {0, 0, 1}, INFINITY};
+    const Hit hit = scene.accel().intersect(ray);
+    REQUIRE(hit.hit());
+    CHECK(hit.geom == static_cast<std::uint32_t>(k));
+    CHECK(hit.prim == 0);
+    CHECK(scene.prim_index(hit) == static_cast<std::uint32_t>(k));
+    CHECK(scene.surface(ray, hit).material == static_cast<std::uint32_t>(k));
+  }
+  const Ray down{{5.5f, 5.5f, 2}, 0.0f, {0, 0, -1}, INFINITY};
+  const Hit hit = scene.accel().intersect(down);
+  REQUIRE(hit.hit());
+  CHECK(hit.geom == 3);
+  CHECK(scene.surface(down, hit).material == 3);
+}
