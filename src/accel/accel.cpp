@@ -33,6 +33,8 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
                 std::to_string(kInvalidPrim - 1) + " primitives an Accel holds (it has " +
                 std::to_string(impl_->next_id) + ")");
   const std::uint32_t geometry = impl_->new_geometry(static_cast<std::uint32_t>(triangle_count), false);
+  impl_->geometries.back().indices.assign(indices, indices + 3 * triangle_count);
+  impl_->geometries.back().vertex_count = vertex_count;
   auto& tris = impl_->triangles;
   tris.reserve(tris.size() + 3 * triangle_count);
   impl_->triangle_ids.reserve(impl_->triangle_ids.size() + triangle_count);
@@ -64,12 +66,35 @@ std::uint32_t Accel::add_polygon(const float* xyz, std::size_t vertex_count) {
 }
 
 void Accel::disable_geometry(std::uint32_t geometry) {
-  impl_->geometry_at("disable_geometry", geometry).enabled = false;
+  Impl::Geometry& g = impl_->geometry_at("disable_geometry", geometry);
+  impl_->topology_changed |= g.enabled;
+  g.enabled = false;
   impl_->committed = false;
 }
 
 void Accel::enable_geometry(std::uint32_t geometry) {
-  impl_->geometry_at("enable_geometry", geometry).enabled = true;
+  Impl::Geometry& g = impl_->geometry_at("enable_geometry", geometry);
+  impl_->topology_changed |= !g.enabled;
+  g.enabled = true;
+  impl_->committed = false;
+}
+
+void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_t vertex_count) {
+  Impl::Geometry& g = impl_->geometry_at("update_vertices", geometry);
+  if (g.polygon) throw Error("update_vertices: geometry " + std::to_string(geometry) + " is a polygon, not triangles");
+  if (vertex_count != g.vertex_count)
+    throw Error("update_vertices: geometry " + std::to_string(geometry) + " was added with " +
+                std::to_string(g.vertex_count) + " vertices, got " + std::to_string(vertex_count) +
+                " (the topology stays: add a new geometry to change it)");
+  for (std::size_t i = 0; i < 3 * vertex_count; ++i)
+    if (!std::isfinite(xyz[i]))
+      throw Error("update_vertices: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+  glm::vec3* out = impl_->triangles.data() + 3 * g.index;
+  for (std::size_t k = 0; k < g.indices.size(); ++k) {
+    const std::uint32_t idx = g.indices[k];
+    out[k] = {xyz[3 * idx], xyz[3 * idx + 1], xyz[3 * idx + 2]};
+  }
+  impl_->vertices_changed = true;
   impl_->committed = false;
 }
 
@@ -87,6 +112,8 @@ void Accel::commit(const Options& options) {
                 std::string(to_string(isa)) + (options.isa == Isa::automatic ? " (from Isa::automatic)" : ""));
   if (options.reference_double && !options.robust)
     throw Error("commit: reference_double traverses with robust slabs; robust = false contradicts it");
+  Options resolved = options;
+  resolved.isa = isa;
   impl_->isa = isa;
   impl_->test = options.test;
   impl_->robust = options.robust;
@@ -94,7 +121,7 @@ void Accel::commit(const Options& options) {
   // A build that fails half way leaves no structure to query: uncommitted until it is done.
   impl_->committed = false;
   try {
-    impl_->build();
+    if (!impl_->refit(resolved)) impl_->build();
   } catch (const std::bad_alloc&) {
     throw OutOfMemory("commit: out of memory building the structure of " + std::to_string(impl_->triangle_ids.size()) +
                       " triangles and " + std::to_string(impl_->polygons.size()) +

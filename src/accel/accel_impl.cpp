@@ -1,6 +1,7 @@
 #include "accel/accel_impl.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -51,6 +52,7 @@ std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, bool polygon) {
   if (geometries.size() >= kInvalidId) throw Error("add: the Accel holds the most geometries it can");
   geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon});
   committed = false;
+  topology_changed = true;
   return static_cast<std::uint32_t>(geometries.size() - 1);
 }
 
@@ -112,18 +114,52 @@ void Accel::Impl::build() {
       }
     });
     degenerate = static_cast<std::size_t>(std::count(is_degenerate.begin(), is_degenerate.end(), 1));
+    excluded.resize(n);
+    for (std::size_t i = 0; i < n; ++i) excluded[i] = is_degenerate[i] | left_out[i];
+    degenerate_flags = std::move(is_degenerate);
     triangle_engine = isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
                       : reference_double ? accel::make_reference_engine(test)
                                          : accel::make_oracle_engine(test, robust);
     core::Bvh bvh = core::build_bvh(boxes, triangle_engine->bvh_options());
     // Reported with unit costs (AccelInfo: node visit = 1, triangle test = 1).
     triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
-    triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n});
+    triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, excluded.data()});
+    built_sah = sah_now = triangle_engine->sah_cost();
   }
   if (!enabled_polygons.empty())
     polygon_engine = accel::make_polygon_engine(enabled_polygons, enabled_polygon_ids, robust);
   wide_only = triangle_engine && !polygon_engine ? triangle_engine->wide() : nullptr;
   one_geometry = geometries.size() == 1;
+  topology_changed = vertices_changed = refitted = false;
+  built_with = {test, isa, robust, reference_double};
+}
+
+bool Accel::Impl::refit(const Options& options) {
+  const bool same = options.test == built_with.test && options.isa == built_with.isa &&
+                    options.robust == built_with.robust && options.reference_double == built_with.reference_double;
+  if (!options.refit || !same || topology_changed || !vertices_changed || !triangle_engine) return false;
+  // A triangle turned degenerate (or back) changes what the build leaves out: build.
+  const std::size_t n = triangle_ids.size();
+  std::atomic<bool> flipped{false};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end() && !flipped.load(std::memory_order_relaxed); ++i) {
+      const glm::vec3* p = &triangles[3 * i];
+      const bool flat = reference_double
+                            ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
+                                                          core::Vec3<double>(p[2]))
+                            : core::is_degenerate(p[0], p[1], p[2]);
+      if (flat != (degenerate_flags[i] != 0)) flipped = true;
+    }
+  });
+  if (flipped) return false;
+  // The wide BVH's blocks name triangles by internal id.
+  std::vector<std::uint32_t> index_of(next_id, 0);
+  for (std::size_t i = 0; i < n; ++i) index_of[triangle_ids[i]] = static_cast<std::uint32_t>(i);
+  sah_now = triangle_engine->refit({triangles.data(), triangle_ids.data(), n, excluded.data()}, index_of.data());
+  if (!(sah_now <= kRefitRebuildGrowth * built_sah)) return false;
+  vertices_changed = false;
+  refitted = true;
+  return true;
 }
 
 Hit Accel::Impl::intersect(const Ray& ray) const {
@@ -227,6 +263,8 @@ AccelInfo Accel::Impl::info() const {
   info.polygons = polygons.size();
   info.geometries = geometries.size();
   info.disabled = disabled;
+  info.refitted = refitted;
+  info.sah_growth = built_sah > 0.0 ? sah_now / built_sah : 1.0;
   info.test = test;
   info.isa = isa;
   info.robust = robust;

@@ -27,6 +27,8 @@ struct Accel::Impl {
     std::size_t index;    ///< its first primitive's place in triangle_ids or polygon_ids
     bool polygon;
     bool enabled = true;
+    std::vector<std::uint32_t> indices;  ///< triangles: the vertex indices as added (update_vertices)
+    std::size_t vertex_count = 0;        ///< triangles: the vertices the add call gave
   };
 
   // Input, in internal-id order of each kind.
@@ -48,6 +50,15 @@ struct Accel::Impl {
   core::BvhStats triangle_stats;  ///< of the binary triangle BVH, as built (unit costs)
   std::size_t disabled = 0;       ///< geometries left out at the commit
   bool one_geometry = false;      ///< the committed scene has one geometry (hits need no search)
+  // What decides between a refit and a build at the next commit (Options::refit).
+  bool topology_changed = true;   ///< a geometry added, enabled or disabled since the last build
+  bool vertices_changed = false;  ///< update_vertices since the last commit
+  Options built_with;             ///< the options of the last build (isa resolved)
+  std::vector<unsigned char> degenerate_flags;  ///< per triangle, as of the last build
+  std::vector<unsigned char> excluded;          ///< per triangle: left out of the BVH at the last build
+  double built_sah = 0.0;         ///< triangle SAH cost at the last build
+  double sah_now = 0.0;           ///< the same now (after refits)
+  bool refitted = false;          ///< the last commit refitted
   std::unique_ptr<accel::TriangleEngine> triangle_engine;
   std::unique_ptr<accel::Engine> polygon_engine;
   std::vector<core::Polygon> enabled_polygons;  ///< what polygon_engine holds (enabled geometries)
@@ -71,7 +82,11 @@ struct Accel::Impl {
     attribute_search(prim, geom);
   }
 
+  /// Builds every engine for the committed options (test, isa, robust, reference_double).
   void build();
+  /// Refits the triangle engine to moved vertices when that is allowed and pays (see
+  /// Options::refit); false (nothing built) when the caller must build instead.
+  bool refit(const Options& options);
   Hit intersect(const Ray& ray) const;
   bool occluded(const Ray& ray) const;
   template <int K>

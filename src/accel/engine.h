@@ -47,9 +47,10 @@ class Engine {
 /// The triangles of a scene, in prim-id order (borrowed: Accel::Impl keeps them, and adding
 /// geometry uncommits the Accel, so no query reads them after they change).
 struct Triangles {
-  const glm::vec3* vertices;  ///< 3 per triangle
+  const glm::vec3* vertices;      ///< 3 per triangle
   const std::uint32_t* ids;
   std::size_t count;
+  const unsigned char* excluded;  ///< 1 per triangle: 1 = left out of the BVH (degenerate or disabled)
 };
 
 /// An engine over triangles: Accel::Impl builds the binary BVH it asks for over the
@@ -60,6 +61,12 @@ class TriangleEngine : public Engine {
   virtual core::BvhBuildOptions bvh_options() const = 0;
   /// Takes the BVH over `triangles`; called once.
   virtual void build(core::Bvh bvh, const Triangles& triangles) = 0;
+  /// Refits the structure to moved triangles (same triangles, same tree: boxes and the
+  /// triangle data recomputed). `index_of` maps an internal id to its triangle's place in
+  /// `triangles`. Returns the SAH cost after the refit (AccelInfo::sah_cost's measure).
+  virtual double refit(const Triangles& triangles, const std::uint32_t* index_of) = 0;
+  /// The SAH cost of the structure as it is.
+  virtual double sah_cost() const = 0;
   /// The wide BVH when this is the SIMD engine: Accel's single-ray queries call it directly
   /// when the scene has nothing else (one call per ray less).
   virtual const WideAccel* wide() const { return nullptr; }

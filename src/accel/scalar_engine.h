@@ -51,12 +51,18 @@ class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
     stats_ = core::bvh_stats(bvh_, core::BvhBuildOptions{});
     if (test_ != TriangleTest::plane) return;
     planes_.reserve(t.count);
-    for (std::size_t i = 0; i < t.count; ++i) {
-      const glm::vec3* p = &t.vertices[3 * i];
-      planes_.push_back(
-          core::PlaneTriangle<Real>::from(core::Vec3<Real>(p[0]), core::Vec3<Real>(p[1]), core::Vec3<Real>(p[2])));
-    }
+    for (std::size_t i = 0; i < t.count; ++i) planes_.push_back(plane_of(i));
   }
+  double refit(const Triangles& t, const std::uint32_t*) override {
+    triangles_ = t;
+    if (!bvh_.nodes.empty()) refit_node(0);
+    stats_ = core::bvh_stats(bvh_, core::BvhBuildOptions{});
+    if (test_ == TriangleTest::plane)
+      for (std::size_t i = 0; i < t.count; ++i) planes_[i] = plane_of(i);
+    return stats_.sah_cost;
+  }
+  double sah_cost() const override { return stats_.sah_cost; }
+
   void describe(AccelInfo& info) const override {
     info.nodes = stats_.nodes;
     info.leaves = stats_.leaves;
@@ -70,6 +76,29 @@ class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
   }
 
  protected:
+  core::PlaneTriangle<Real> plane_of(std::size_t i) const {
+    const glm::vec3* p = &triangles_.vertices[3 * i];
+    return core::PlaneTriangle<Real>::from(core::Vec3<Real>(p[0]), core::Vec3<Real>(p[1]), core::Vec3<Real>(p[2]));
+  }
+  /// The box of node n's subtree from the triangles as they are now; a triangle left out
+  /// at the build (Triangles::excluded) keeps its empty box. Depth <= kBvhMaxDepth.
+  core::BBox refit_node(std::uint32_t n) {
+    core::BvhNode& node = bvh_.nodes[n];
+    core::BBox box;
+    if (node.is_leaf()) {
+      for (std::uint32_t k = 0; k < node.count; ++k) {
+        const std::uint32_t prim = bvh_.prim_index[node.first_or_child + k];
+        if (triangles_.excluded[prim]) continue;
+        for (int c = 0; c < 3; ++c) box.extend(triangles_.vertices[3 * std::size_t{prim} + c]);
+      }
+    } else {
+      box = refit_node(node.first_or_child);
+      box.extend(refit_node(node.first_or_child + 1));
+    }
+    node.box = box;
+    return box;
+  }
+
   /// Triangle `prim` against `q` by the committed test (`woop`: q's shear).
   bool test_triangle(const core::RayT<Real>& q, const core::WoopRay<Real>& woop, std::uint32_t prim,
                      core::TriHit<Real>& h) const {

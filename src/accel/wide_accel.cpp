@@ -31,6 +31,9 @@ class WideAccelFor final : public WideAccel {
     stats_ = build_wide<Test, W>(bvh, xyz, ids, nodes_, blocks_, root_);
     view_ = {nodes_.data(), blocks_.data(), root_};
   }
+  void refit(const float* xyz, const std::uint32_t* index_of) override {
+    stats_ = refit_wide<Test, W>(xyz, index_of, nodes_, blocks_, stats_);
+  }
   const simd::WideStats& stats() const override { return stats_; }
 
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override {

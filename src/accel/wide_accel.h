@@ -29,6 +29,9 @@ class WideAccel {
   /// Collapses `bvh` (a binary BVH over triangles: triangle i has vertices xyz[9i .. 9i+9)
   /// and id ids[i]) and packs its leaves (accel::build_wide). Replaces an earlier build.
   virtual void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) = 0;
+  /// Refits the built BVH to moved triangles (refit_wide): triangle with id `id` now has
+  /// vertices xyz[9 * index_of[id] ..]. Not thread-safe (no query may run).
+  virtual void refit(const float* xyz, const std::uint32_t* index_of) = 0;
   /// Size and quality of the built structure.
   virtual const simd::WideStats& stats() const = 0;
 

@@ -34,4 +34,14 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
                            simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,
                            simd::AlignedVector<simd::BlockFor<Test, W>>& blocks, std::uint32_t& root);
 
+/// Refits a BVH build_wide made to moved triangles, in place: the same tree, each leaf's
+/// blocks repacked from the new vertices (in the same lanes), every box recomputed
+/// bottom-up, and the SAH costs of `stats` recomputed (the rest kept). The triangle with
+/// id `id` (as given to build_wide) now has vertices xyz[9 * index_of[id] .. + 9). Parallel
+/// on oneTBB.
+template <TriangleTest Test, int W>
+simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of,
+                           simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,
+                           simd::AlignedVector<simd::BlockFor<Test, W>>& blocks, simd::WideStats stats);
+
 }  // namespace volley::accel

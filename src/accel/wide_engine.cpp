@@ -35,6 +35,11 @@ class WideEngine final : public TriangleEngine {
     accel_->build(bvh, reinterpret_cast<const float*>(t.vertices), t.ids);
   }
   const WideAccel* wide() const override { return accel_.get(); }
+  double refit(const Triangles& t, const std::uint32_t* index_of) override {
+    accel_->refit(reinterpret_cast<const float*>(t.vertices), index_of);
+    return sah_cost();
+  }
+  double sah_cost() const override { return accel_->stats().sah_cost; }
 
   bool intersect(const Ray& ray, Hit& hit) const override {
     const float before = hit.t;

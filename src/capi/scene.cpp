@@ -111,6 +111,7 @@ volley_status commit(volley_scene* scene, const volley_commit_options* in, const
     options.isa = to_isa(raw_value(in->isa));
     options.robust = in->robust != 0;
     options.reference_double = in->reference_double != 0;
+    options.refit = in->refit != 0;
     if (options.reference_double && (options.isa != volley::Isa::scalar || !options.robust))
       fail(VOLLEY_ERROR_INVALID_ARGUMENT, "reference_double needs VOLLEY_ISA_SCALAR and robust box tests");
     try {
@@ -206,6 +207,20 @@ volley_status volley_scene_disable_geometry(volley_scene* scene, uint32_t geomet
   });
 }
 
+volley_status volley_scene_update_vertices(volley_scene* scene, uint32_t geometry, const float* xyz,
+                                          size_t vertex_count) {
+  // (Accel's Error: an unknown id or another vertex count is an argument error; the
+  // coordinates are checked here first.)
+  return guarded("volley_scene_update_vertices", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
+    require_pointer(scene, "scene");
+    require_pointer(xyz, "xyz");
+    require_triple_fits(vertex_count, "vertex_count");
+    require_finite(xyz, vertex_count);
+    scene->accel.update_vertices(geometry, xyz, vertex_count);
+    scene->committed = false;
+  });
+}
+
 volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometry) {
   return guarded("volley_scene_enable_geometry", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
     require_pointer(scene, "scene");
@@ -220,6 +235,7 @@ void volley_commit_options_default(volley_commit_options* options) {
   options->isa = VOLLEY_ISA_AUTO;
   options->robust = 1;
   options->reference_double = 0;
+  options->refit = 1;
 }
 
 volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa) {
@@ -254,6 +270,8 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.isa = from_isa(a.isa);
     out.geometries = a.geometries;
     out.disabled = a.disabled;
+    out.refitted = a.refitted ? 1 : 0;
+    out.sah_growth = a.sah_growth;
     *info = out;
   });
 }

@@ -37,6 +37,8 @@ struct AccelInfo {
   std::size_t polygons = 0;        ///< planar polygons added
   std::size_t geometries = 0;      ///< geometries (one per add_triangles / add_polygon call)
   std::size_t disabled = 0;        ///< geometries disabled at the commit (left out of the structure)
+  bool refitted = false;           ///< the last commit refitted the BVH (Options::refit) instead of building it
+  double sah_growth = 1.0;         ///< triangle SAH cost now / at the last full build (1 after a build)
   std::size_t nodes = 0;           ///< BVH nodes (wide: interior nodes; binary: all nodes)
   std::size_t leaves = 0;          ///< BVH leaves
   std::size_t depth = 0;           ///< deepest leaf (root = 0)
@@ -95,6 +97,14 @@ class VOLLEY_API Accel {
   /// Brings a disabled geometry back from the next commit() on (a no-op for an enabled
   /// one). Uncommits the Accel. Throws Error for an id no add call returned.
   void enable_geometry(std::uint32_t geometry);
+
+  /// Moves the vertices of a triangle geometry: `xyz` holds 3*vertex_count floats, the
+  /// same vertex_count as its add_triangles call, and its triangles keep their indices.
+  /// Data is copied. The next commit() refits the BVH instead of building it when nothing
+  /// else changed (Options::refit). Uncommits the Accel. Throws Error for an id no
+  /// add_triangles call returned, another vertex count, or a non-finite coordinate (then
+  /// nothing changes).
+  void update_vertices(std::uint32_t geometry, const float* xyz, std::size_t vertex_count);
 
   /// Builds the acceleration structure. Call again after adding more geometry. Throws
   /// Error (leaving the Accel unchanged) when the CPU lacks options.isa, or when

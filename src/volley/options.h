@@ -38,7 +38,18 @@ struct Options {
   /// rays widened from float, t rounded back). The reference of the accuracy report;
   /// commit throws Error with a SIMD ISA.
   bool reference_double = false;
+  /// After update_vertices(), with nothing else changed since the last commit (no geometry
+  /// added, enabled or disabled; the same options; no triangle turned degenerate or back),
+  /// commit refits the existing BVH: the same tree, boxes and triangle data recomputed,
+  /// much faster than a build. If the refit leaves the SAH cost more than
+  /// kRefitRebuildGrowth times that of the last full build, commit rebuilds after all.
+  /// false: always rebuild.
+  bool refit = true;
 };
+
+/// SAH cost growth (after a refit, against the last full build) past which commit
+/// rebuilds instead (Options::refit).
+inline constexpr double kRefitRebuildGrowth = 1.5;
 
 /// Names as used on the command line ("plane", "moller", "watertight").
 VOLLEY_API std::string_view to_string(TriangleTest test);

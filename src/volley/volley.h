@@ -186,6 +186,8 @@ typedef struct volley_scene_info {
   volley_isa isa;            /**< the ISA in use (never VOLLEY_ISA_AUTO) */
   size_t geometries;         /**< geometries added */
   size_t disabled;           /**< geometries left out at the last commit */
+  int refitted;              /**< nonzero: the last commit refitted the BVH instead of building it */
+  double sah_growth;         /**< SAH cost of the triangle BVH now / at the last full build */
 } volley_scene_info;
 
 /** A scene: triangles and polygons plus the acceleration structure built over them.
@@ -247,6 +249,16 @@ VOLLEY_API volley_status volley_scene_add_polygon(volley_scene* scene, const flo
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
 VOLLEY_API volley_status volley_scene_disable_geometry(volley_scene* scene, uint32_t geometry);
 
+/** Moves the vertices of a triangle geometry: xyz holds 3 * vertex_count floats, the same
+ *  vertex_count as its volley_scene_add_triangles call; its triangles keep their indices.
+ *  Copied. The next commit refits the BVH instead of building it when nothing else changed
+ *  (volley_commit_options.refit); the scene must be committed again before the next query.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or xyz, an id no
+ *  volley_scene_add_triangles call returned, or another vertex count;
+ *  VOLLEY_ERROR_INVALID_GEOMETRY for a non-finite coordinate. Nothing changes on error. */
+VOLLEY_API volley_status volley_scene_update_vertices(volley_scene* scene, uint32_t geometry, const float* xyz,
+                                                      size_t vertex_count);
+
 /** Brings a disabled geometry back from the next commit on (nothing changes for an
  *  enabled one, but the scene must still be committed again).
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
@@ -272,6 +284,8 @@ typedef struct volley_commit_options {
                                   test stays watertight through the whole BVH; 0: plain box tests (faster) */
   int reference_double;      /**< nonzero: the scalar oracle with triangle tests in double precision (the
                                   accuracy reference); needs VOLLEY_ISA_SCALAR and robust; default 0 */
+  int refit;                 /**< nonzero (default): after volley_scene_update_vertices with nothing else
+                                  changed, refit the BVH instead of building it (volley::Options::refit) */
 } volley_commit_options;
 
 /** The defaults of volley_commit_options (those of volley_scene_commit). NULL is ignored. */
