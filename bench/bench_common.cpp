@@ -35,6 +35,7 @@ SceneFile scene_file(const std::string& name) {
       {"bunny", {Dir::bench, "bunny.json"}},            // 69 k triangles, close-up
       {"conference", {Dir::bench, "conference.json"}},  // 331 k triangles, camera inside the room
       {"bunny-bare", {Dir::shared, "stanford-bunny.obj"}},  // a bare mesh: automatic camera and light
+      {"kitchen", {Dir::shared, "kitchen_partial.obj"}},    // 1 M triangles, a bare mesh (refit suite)
   };
   const auto it = kScenes.find(name);
   if (it == kScenes.end()) throw std::invalid_argument("unknown benchmark scene " + name);

@@ -32,7 +32,8 @@ struct SceneFile {
 
 /// Resolves a scene name used in benchmark names: "cornell", "cornell-original",
 /// "polygons" (project scenes), "teapot", "bunny", "conference" (bench/scenes: the shared
-/// meshes with a camera that looks at them from close by or from inside).
+/// meshes with a camera that looks at them from close by or from inside), "bunny-bare",
+/// "kitchen" (shared meshes as they are).
 /// Throws std::invalid_argument for an unknown name.
 SceneFile scene_file(const std::string& name);
 

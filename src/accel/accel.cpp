@@ -94,6 +94,7 @@ void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_
     const std::uint32_t idx = g.indices[k];
     out[k] = {xyz[3 * idx], xyz[3 * idx + 1], xyz[3 * idx + 2]};
   }
+  g.moved = true;
   impl_->vertices_changed = true;
   impl_->committed = false;
 }

@@ -63,6 +63,14 @@ Accel::Impl::Geometry& Accel::Impl::geometry_at(const char* caller, std::uint32_
   return geometries[geometry];
 }
 
+bool Accel::Impl::flat(std::size_t i) const {
+  const glm::vec3* p = &triangles[3 * i];
+  // The reference keeps what has area in double (a float cross product can round to 0).
+  return reference_double ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
+                                                        core::Vec3<double>(p[2]))
+                          : core::is_degenerate(p[0], p[1], p[2]);
+}
+
 void Accel::Impl::attribute_search(std::uint32_t& prim, std::uint32_t& geom) const {
   // The last geometry whose first id is <= prim (empty geometries share their first id with
   // the next one; the search passes them).
@@ -81,8 +89,10 @@ void Accel::Impl::build() {
   triangle_stats = {};
   degenerate = 0;
   disabled = 0;
-  // Triangles of disabled geometries keep an empty box: no node holds them.
-  std::vector<unsigned char> left_out(n, 0);
+  // Triangles of disabled geometries keep an empty box: no node holds them. Those of moved
+  // geometries (update_vertices) go into the tree even when degenerate, so that a refit
+  // finds them where a later move gives them area.
+  std::vector<unsigned char> left_out(n, 0), moving(n, 0);
   enabled_polygons.clear();
   enabled_polygon_ids.clear();
   for (const Geometry& g : geometries) {
@@ -90,33 +100,27 @@ void Accel::Impl::build() {
       enabled_polygons.push_back(polygons[g.index]);
       enabled_polygon_ids.push_back(polygon_ids[g.index]);
     }
+    if (g.moved) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
     if (g.enabled) continue;
     ++disabled;
     if (!g.polygon) std::fill_n(left_out.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
   }
   if (n != 0) {
     simd::AlignedVector<core::BBox> boxes(n);  // huge pages: 24 MB for a million triangles
-    // Degenerate triangles can never be hit: an empty box keeps them out of traversal.
+    // Degenerate triangles can never be hit: an empty box keeps them out of traversal
+    // (except in moved geometries, above; the kernels never hit them either).
     std::vector<unsigned char> is_degenerate(n, 0);
+    excluded.assign(n, 0);
+    excluded_flat.assign(n, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        const glm::vec3* p = &triangles[3 * i];
-        // The reference keeps what has area in double (a float cross product can round to 0).
-        const bool flat = reference_double
-                              ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
-                                                            core::Vec3<double>(p[2]))
-                              : core::is_degenerate(p[0], p[1], p[2]);
-        if (flat) {
-          is_degenerate[i] = 1;
-          continue;
-        }
-        if (!left_out[i]) boxes[i] = triangle_box(p);
+        is_degenerate[i] = flat(i);
+        excluded_flat[i] = is_degenerate[i] && !moving[i];
+        excluded[i] = excluded_flat[i] | left_out[i];
+        if (!excluded[i]) boxes[i] = triangle_box(&triangles[3 * i]);
       }
     });
     degenerate = static_cast<std::size_t>(std::count(is_degenerate.begin(), is_degenerate.end(), 1));
-    excluded.resize(n);
-    for (std::size_t i = 0; i < n; ++i) excluded[i] = is_degenerate[i] | left_out[i];
-    degenerate_flags = std::move(is_degenerate);
     triangle_engine = isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
                       : reference_double ? accel::make_reference_engine(test)
                                          : accel::make_oracle_engine(test, robust);
@@ -138,24 +142,24 @@ bool Accel::Impl::refit(const Options& options) {
   const bool same = options.test == built_with.test && options.isa == built_with.isa &&
                     options.robust == built_with.robust && options.reference_double == built_with.reference_double;
   if (!options.refit || !same || topology_changed || !vertices_changed || !triangle_engine) return false;
-  // A triangle turned degenerate (or back) changes what the build leaves out: build.
+  // A triangle the build left out as degenerate that now has area needs a build (which
+  // puts every triangle of a moved geometry into the tree).
   const std::size_t n = triangle_ids.size();
-  std::atomic<bool> flipped{false};
+  std::atomic<bool> gained_area{false};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end() && !flipped.load(std::memory_order_relaxed); ++i) {
-      const glm::vec3* p = &triangles[3 * i];
-      const bool flat = reference_double
-                            ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
-                                                          core::Vec3<double>(p[2]))
-                            : core::is_degenerate(p[0], p[1], p[2]);
-      if (flat != (degenerate_flags[i] != 0)) flipped = true;
-    }
+    for (std::size_t i = r.begin(); i < r.end() && !gained_area.load(std::memory_order_relaxed); ++i)
+      if (excluded_flat[i] && !flat(i)) gained_area = true;
   });
-  if (flipped) return false;
-  // The wide BVH's blocks name triangles by internal id.
-  std::vector<std::uint32_t> index_of(next_id, 0);
-  for (std::size_t i = 0; i < n; ++i) index_of[triangle_ids[i]] = static_cast<std::uint32_t>(i);
-  sah_now = triangle_engine->refit({triangles.data(), triangle_ids.data(), n, excluded.data()}, index_of.data());
+  if (gained_area) return false;
+  // The wide BVH's blocks name triangles by internal id: the same as the triangle's place
+  // unless polygons came in between (ids rise, so the last one tells).
+  std::vector<std::uint32_t> index_of;
+  if (triangle_ids.back() != n - 1) {
+    index_of.assign(next_id, 0);
+    for (std::size_t i = 0; i < n; ++i) index_of[triangle_ids[i]] = static_cast<std::uint32_t>(i);
+  }
+  sah_now = triangle_engine->refit({triangles.data(), triangle_ids.data(), n, excluded.data()},
+                                     index_of.empty() ? nullptr : index_of.data());
   if (!(sah_now <= kRefitRebuildGrowth * built_sah)) return false;
   vertices_changed = false;
   refitted = true;

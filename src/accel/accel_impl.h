@@ -29,6 +29,7 @@ struct Accel::Impl {
     bool enabled = true;
     std::vector<std::uint32_t> indices;  ///< triangles: the vertex indices as added (update_vertices)
     std::size_t vertex_count = 0;        ///< triangles: the vertices the add call gave
+    bool moved = false;                  ///< update_vertices was called on it (a deforming mesh)
   };
 
   // Input, in internal-id order of each kind.
@@ -54,8 +55,8 @@ struct Accel::Impl {
   bool topology_changed = true;   ///< a geometry added, enabled or disabled since the last build
   bool vertices_changed = false;  ///< update_vertices since the last commit
   Options built_with;             ///< the options of the last build (isa resolved)
-  std::vector<unsigned char> degenerate_flags;  ///< per triangle, as of the last build
-  std::vector<unsigned char> excluded;          ///< per triangle: left out of the BVH at the last build
+  std::vector<unsigned char> excluded;       ///< per triangle: left out of the BVH at the last build
+  std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate
   double built_sah = 0.0;         ///< triangle SAH cost at the last build
   double sah_now = 0.0;           ///< the same now (after refits)
   bool refitted = false;          ///< the last commit refitted
@@ -99,6 +100,8 @@ struct Accel::Impl {
   AccelInfo info() const;
 
  private:
+  /// Whether triangle i has no area (in double with reference_double).
+  bool flat(std::size_t i) const;
   /// attribute() for a scene of several geometries: a binary search of the first ids.
   void attribute_search(std::uint32_t& prim, std::uint32_t& geom) const;
   template <int K>

@@ -63,7 +63,7 @@ class TriangleEngine : public Engine {
   virtual void build(core::Bvh bvh, const Triangles& triangles) = 0;
   /// Refits the structure to moved triangles (same triangles, same tree: boxes and the
   /// triangle data recomputed). `index_of` maps an internal id to its triangle's place in
-  /// `triangles`. Returns the SAH cost after the refit (AccelInfo::sah_cost's measure).
+  /// `triangles` (null: they are the same). Returns the SAH cost after the refit (AccelInfo::sah_cost's measure).
   virtual double refit(const Triangles& triangles, const std::uint32_t* index_of) = 0;
   /// The SAH cost of the structure as it is.
   virtual double sah_cost() const = 0;

@@ -37,8 +37,8 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
 /// Refits a BVH build_wide made to moved triangles, in place: the same tree, each leaf's
 /// blocks repacked from the new vertices (in the same lanes), every box recomputed
 /// bottom-up, and the SAH costs of `stats` recomputed (the rest kept). The triangle with
-/// id `id` (as given to build_wide) now has vertices xyz[9 * index_of[id] .. + 9). Parallel
-/// on oneTBB.
+/// id `id` (as given to build_wide) now has vertices xyz[9 * index_of[id] .. + 9), or
+/// xyz[9 * id ..] when index_of is null. Parallel on oneTBB.
 template <TriangleTest Test, int W>
 simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of,
                            simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,

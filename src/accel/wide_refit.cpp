@@ -44,29 +44,50 @@ simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of, simd
                            simd::AlignedVector<simd::BlockFor<Test, W>>& blocks, simd::WideStats stats) {
   namespace ref = simd::wide_ref;
   if (nodes.empty()) return stats;
+  // The leaves' SAH terms per node (area x triangles, area x blocks), summed afterwards in
+  // node order so that the result does not depend on the threads.
+  std::vector<double> leaf_tris(nodes.size(), 0.0), leaf_blocks(nodes.size(), 0.0);
   // Leaves, nodes in parallel: each leaf's triangles are its blocks' used lanes, in order.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<float> tri_xyz;
     std::vector<std::uint32_t> tri_ids;
+    std::uint32_t leaf_end[N];  // tri_ids of slot j: [leaf_end[j - 1], leaf_end[j])
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       simd::WideNode<N>& node = nodes[i];
+      // The node's leaves' triangles lie anywhere in xyz: request them all (dozens of
+      // lines in flight) before the first copy.
+      tri_ids.clear();
+      for (int j = 0; j < N; ++j) {
+        const std::uint32_t child = node.child[j];
+        if (child != ref::kEmptyRef && (child & ref::kLeafBit))
+          for (std::uint32_t b = ref::leaf_first(child); b < ref::leaf_first(child) + ref::leaf_count(child); ++b)
+            for (int lane = 0; lane < W; ++lane) {
+              const std::uint32_t id = blocks[b].prim[lane];
+              if (id == volley::kInvalidPrim) continue;
+              tri_ids.push_back(id);
+              const float* p = xyz + 9 * std::size_t{index_of ? index_of[id] : id};
+              __builtin_prefetch(p);
+              __builtin_prefetch(p + 8);
+            }
+        leaf_end[j] = static_cast<std::uint32_t>(tri_ids.size());
+      }
+      tri_xyz.resize(9 * tri_ids.size());
+      for (std::size_t t = 0; t < tri_ids.size(); ++t)
+        std::memcpy(tri_xyz.data() + 9 * t, xyz + 9 * std::size_t{index_of ? index_of[tri_ids[t]] : tri_ids[t]},
+                    9 * sizeof(float));
       for (int j = 0; j < N; ++j) {
         const std::uint32_t child = node.child[j];
         if (child == ref::kEmptyRef || !(child & ref::kLeafBit)) continue;
-        const std::uint32_t first = ref::leaf_first(child), count = ref::leaf_count(child);
-        tri_ids.clear();
-        for (std::uint32_t b = first; b < first + count; ++b)
-          for (int lane = 0; lane < W; ++lane)
-            if (blocks[b].prim[lane] != volley::kInvalidPrim) tri_ids.push_back(blocks[b].prim[lane]);
-        tri_xyz.resize(9 * tri_ids.size());
+        const std::uint32_t begin = j == 0 ? 0 : leaf_end[j - 1], end = leaf_end[j];
         core::BBox box;
-        for (std::size_t t = 0; t < tri_ids.size(); ++t) {
-          const float* p = xyz + 9 * std::size_t{index_of[tri_ids[t]]};
-          std::memcpy(tri_xyz.data() + 9 * t, p, 9 * sizeof(float));
-          for (int k = 0; k < 3; ++k) box.extend({p[3 * k], p[3 * k + 1], p[3 * k + 2]});
-        }
-        simd::pack_blocks<Test, W>(tri_xyz.data(), tri_ids.data(), tri_ids.size(), blocks.data() + first);
+        for (std::uint32_t t = begin; t < end; ++t)
+          for (int k = 0; k < 3; ++k) box.extend({tri_xyz[9 * t + 3 * k], tri_xyz[9 * t + 3 * k + 1], tri_xyz[9 * t + 3 * k + 2]});
+        simd::pack_blocks<Test, W>(tri_xyz.data() + 9 * std::size_t{begin}, tri_ids.data() + begin, end - begin,
+                                   blocks.data() + ref::leaf_first(child));
         set_slot_box(node, j, box);
+        const double area = box.half_area();
+        leaf_tris[i] += area * double(end - begin);
+        leaf_blocks[i] += area * double(ref::leaf_count(child));
       }
     }
   });
@@ -76,19 +97,12 @@ simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of, simd
     simd::WideNode<N>& node = nodes[i];
     for (int j = 0; j < N; ++j) {
       const std::uint32_t child = node.child[j];
-      if (child == ref::kEmptyRef) continue;
-      if (child & ref::kLeafBit) {
-        const double area = slot_box(node, j).half_area();
-        std::size_t used = 0;
-        for (std::uint32_t b = ref::leaf_first(child); b < ref::leaf_first(child) + ref::leaf_count(child); ++b)
-          for (int lane = 0; lane < W; ++lane) used += blocks[b].prim[lane] != volley::kInvalidPrim;
-        leaf_area_tris += area * double(used);
-        leaf_area_blocks += area * double(ref::leaf_count(child));
-      } else {
+      if (child != ref::kEmptyRef && !(child & ref::kLeafBit))
         set_slot_box(node, j, node_box(ref::node_at(nodes.data(), child)));
-      }
     }
     node_area += node_box(node).half_area();
+    leaf_area_tris += leaf_tris[i];
+    leaf_area_blocks += leaf_blocks[i];
   }
   const double root_area = node_box(nodes[0]).half_area();
   if (root_area > 0.0) {

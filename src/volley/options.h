@@ -39,11 +39,12 @@ struct Options {
   /// commit throws Error with a SIMD ISA.
   bool reference_double = false;
   /// After update_vertices(), with nothing else changed since the last commit (no geometry
-  /// added, enabled or disabled; the same options; no triangle turned degenerate or back),
-  /// commit refits the existing BVH: the same tree, boxes and triangle data recomputed,
-  /// much faster than a build. If the refit leaves the SAH cost more than
-  /// kRefitRebuildGrowth times that of the last full build, commit rebuilds after all.
-  /// false: always rebuild.
+  /// added, enabled or disabled; the same options), commit refits the existing BVH: the same
+  /// tree, boxes and triangle data recomputed, about 10x faster than a build. It builds
+  /// instead when a triangle that the last build left out for having no area has gained
+  /// some (a build puts all triangles of a moved geometry into the tree, so this happens at
+  /// most once per geometry), or when the refit leaves the SAH cost more than
+  /// kRefitRebuildGrowth times that of the last build. false: always build.
   bool refit = true;
 };
 

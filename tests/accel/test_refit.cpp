@@ -157,16 +157,33 @@ TEST_CASE("refit: commit builds instead when the topology, the options, a degene
     CHECK(!accel.info().refitted);
   }
   {
-    Accel accel;  // one triangle collapsed to a line: a build, and it is never hit
-    accel.add_triangles(grid.xyz.data(), grid.vertices(), grid.indices.data(), grid.triangles());
-    accel.commit({TriangleTest::watertight, isa});
-    std::vector<float> flat = grid.xyz;
+    // Triangles collapsed to zero area at the first build are left out of it; when a move
+    // gives them area, commit builds (with them), and from then on refits whatever turns
+    // degenerate or back: a degenerate triangle in the tree is never hit.
+    std::vector<float> collapsed = grid.xyz;
     const std::uint32_t a = grid.indices[0], b = grid.indices[1];
-    for (int k = 0; k < 3; ++k) flat[3 * b + k] = flat[3 * a + k];
-    accel.update_vertices(0, flat.data(), grid.vertices());
+    for (int k = 0; k < 3; ++k) collapsed[3 * b + k] = collapsed[3 * a + k];
+    Accel accel;
+    accel.add_triangles(collapsed.data(), grid.vertices(), grid.indices.data(), grid.triangles());
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.info().degenerate >= 1);
+    accel.update_vertices(0, grid.xyz.data(), grid.vertices());
     accel.commit({TriangleTest::watertight, isa});
     CHECK(!accel.info().refitted);
-    CHECK(accel.info().degenerate >= 1);
+    CHECK(accel.info().degenerate == 0);
+    accel.update_vertices(0, collapsed.data(), grid.vertices());
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.info().refitted);
+    accel.update_vertices(0, grid.xyz.data(), grid.vertices());
+    accel.commit({TriangleTest::watertight, isa});
+    CHECK(accel.info().refitted);
+    // Triangle 0 has its area back and is hit where a fresh build hits it.
+    const glm::vec3 p0(grid.xyz[3 * a], grid.xyz[3 * a + 1], 0.0f), p1(grid.xyz[3 * b], grid.xyz[3 * b + 1], 0.0f),
+        p2(grid.xyz[3 * grid.indices[2]], grid.xyz[3 * grid.indices[2] + 1], 0.0f);
+    const glm::vec3 c = (p0 + p1 + p2) / 3.0f;
+    const Hit h = accel.intersect(Ray{{c.x, c.y, 1.0f}, 0.0f, {0, 0, -1}, INFINITY});
+    CHECK(h.geom == 0);
+    CHECK(h.prim == 0);
   }
   {
     Accel accel;  // vertices scattered: the refitted boxes overlap, SAH past the limit, a build
