@@ -49,15 +49,21 @@ std::vector<Ray> incoherent_rays(const io::MeshDesc& mesh) {
   return rays;
 }
 
-void commit_after_move(benchmark::State& state, const std::string& scene, Isa isa, bool refit) {
+/// The scene's merged mesh, labelled with the ISA; null (the benchmark skipped with the
+/// reason) when the scene does not load.
+const io::MeshDesc* mesh_for(benchmark::State& state, const std::string& scene, Isa isa) {
   state.SetLabel(std::string(volley::to_string(isa)));
-  const io::MeshDesc* mesh = nullptr;
   try {
-    mesh = &scene_desc(scene).mesh;
+    return &scene_desc(scene).mesh;
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
-    return;
+    return nullptr;
   }
+}
+
+void commit_after_move(benchmark::State& state, const std::string& scene, Isa isa, bool refit) {
+  const io::MeshDesc* mesh = mesh_for(state, scene, isa);
+  if (!mesh) return;
   const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
   const std::vector<float> moved = deformed(*mesh);
   const float* original = &mesh->positions[0].x;
@@ -84,14 +90,8 @@ void commit_after_move(benchmark::State& state, const std::string& scene, Isa is
 }
 
 void trace_after_move(benchmark::State& state, const std::string& scene, Isa isa, bool refit) {
-  state.SetLabel(std::string(volley::to_string(isa)));
-  const io::MeshDesc* mesh = nullptr;
-  try {
-    mesh = &scene_desc(scene).mesh;
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return;
-  }
+  const io::MeshDesc* mesh = mesh_for(state, scene, isa);
+  if (!mesh) return;
   const std::vector<float> moved = deformed(*mesh);
   const std::vector<Ray> rays = incoherent_rays(*mesh);
   Accel accel;
