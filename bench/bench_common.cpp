@@ -5,8 +5,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <map>
 #include <memory>
+#include <random>
 #include <set>
 #include <stdexcept>
 
@@ -55,6 +57,29 @@ const io::SceneDesc& scene_desc(const std::string& name) {
   auto& slot = cache[name];
   if (!slot) slot = std::make_unique<io::SceneDesc>(io::load_scene(scene_file(name).file, shared_scenes_dir()));
   return *slot;
+}
+
+const io::MeshDesc* mesh_for(benchmark::State& state, const std::string& scene, Isa isa) {
+  state.SetLabel(std::string(volley::to_string(isa)));
+  try {
+    return &scene_desc(scene).mesh;
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return nullptr;
+  }
+}
+
+std::vector<Ray> incoherent_rays(const io::MeshDesc& mesh) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f), d(-1.0f, 1.0f);
+  std::vector<Ray> rays(1 << 16);
+  for (Ray& r : rays) {
+    const glm::vec3 o = lo + (hi - lo) * glm::vec3(u(rng), u(rng), u(rng));
+    r = Ray{{o.x, o.y, o.z}, 0.0f, {d(rng), d(rng), d(rng)}, INFINITY};
+  }
+  return rays;
 }
 
 bool bench_isa(Isa isa) { return isa == Isa::scalar || (isa != Isa::sse42 && simd::cpu_has(isa)); }

@@ -5,9 +5,15 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "io/scene_desc.h"
 #include "volley/options.h"
+#include "volley/ray.h"
+
+namespace benchmark {
+class State;
+}
 
 namespace volley::bench {
 
@@ -45,6 +51,13 @@ void note_scene(const std::string& name);
 /// benchmarks run one at a time). Throws io::LoadError when the file is missing or bad;
 /// callers turn that into State::SkipWithError.
 const io::SceneDesc& scene_desc(const std::string& name);
+
+/// The scene's merged mesh, with the ISA as the benchmark's label; null (the benchmark
+/// skipped with the reason) when the scene does not load.
+const io::MeshDesc* mesh_for(benchmark::State& state, const std::string& scene, Isa isa);
+
+/// 2^16 incoherent rays in the mesh's box: random origins inside it, random directions.
+std::vector<Ray> incoherent_rays(const io::MeshDesc& mesh);
 
 /// ISAs the scene suites register: the scalar oracle plus the SIMD ISAs the CPU has,
 /// narrowest first. (SSE4.2 is left to the kernel suite to keep the scene suites short.)

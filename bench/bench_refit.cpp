@@ -36,31 +36,6 @@ std::vector<float> deformed(const io::MeshDesc& mesh) {
   return out;
 }
 
-std::vector<Ray> incoherent_rays(const io::MeshDesc& mesh) {
-  glm::vec3 lo(INFINITY), hi(-INFINITY);
-  for (const glm::vec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> u(0.0f, 1.0f), d(-1.0f, 1.0f);
-  std::vector<Ray> rays(1 << 16);
-  for (Ray& r : rays) {
-    const glm::vec3 o = lo + (hi - lo) * glm::vec3(u(rng), u(rng), u(rng));
-    r = Ray{{o.x, o.y, o.z}, 0.0f, {d(rng), d(rng), d(rng)}, INFINITY};
-  }
-  return rays;
-}
-
-/// The scene's merged mesh, labelled with the ISA; null (the benchmark skipped with the
-/// reason) when the scene does not load.
-const io::MeshDesc* mesh_for(benchmark::State& state, const std::string& scene, Isa isa) {
-  state.SetLabel(std::string(volley::to_string(isa)));
-  try {
-    return &scene_desc(scene).mesh;
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return nullptr;
-  }
-}
-
 void commit_after_move(benchmark::State& state, const std::string& scene, Isa isa, bool refit) {
   const io::MeshDesc* mesh = mesh_for(state, scene, isa);
   if (!mesh) return;

@@ -11,7 +11,7 @@ seconds=${2:?usage: fuzz/run_all.sh BUILD SECONDS [TARGET ...]}
 shift 2
 here=$(cd "$(dirname "$0")" && pwd)
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_obj fuzz_ply fuzz_scene_json fuzz_ray_file fuzz_capi)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_obj fuzz_ply fuzz_scene_json fuzz_ray_file fuzz_capi fuzz_accel_file)
 mkdir -p "$build/artifacts"
 failed=()
 for t in "${targets[@]}"; do

@@ -32,6 +32,7 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
     throw Error("add_triangles: " + std::to_string(triangle_count) + " triangles more than the " +
                 std::to_string(kInvalidPrim - 1) + " primitives an Accel holds (it has " +
                 std::to_string(impl_->next_id) + ")");
+  impl_->unpack();
   const std::uint32_t geometry = impl_->new_geometry(static_cast<std::uint32_t>(triangle_count), false);
   impl_->geometries.back().indices.assign(indices, indices + 3 * triangle_count);
   impl_->geometries.back().vertex_count = vertex_count;
@@ -89,6 +90,7 @@ void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_
   for (std::size_t i = 0; i < 3 * vertex_count; ++i)
     if (!std::isfinite(xyz[i]))
       throw Error("update_vertices: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+  impl_->unpack();
   glm::vec3* out = impl_->triangles.data() + 3 * g.index;
   for (std::size_t k = 0; k < g.indices.size(); ++k) {
     const std::uint32_t idx = g.indices[k];
@@ -122,6 +124,7 @@ void Accel::commit(const Options& options) {
   // A build that fails half way leaves no structure to query: uncommitted until it is done.
   impl_->committed = false;
   try {
+    impl_->unpack();
     if (!impl_->refit(resolved)) impl_->build();
   } catch (const std::bad_alloc&) {
     throw OutOfMemory("commit: out of memory building the structure of " + std::to_string(impl_->triangle_ids.size()) +
@@ -129,6 +132,7 @@ void Accel::commit(const Options& options) {
                       " polygons; the Accel stays uncommitted (free memory, then commit again)");
   }
   impl_->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  impl_->loaded = false;
   impl_->committed = true;
 }
 
@@ -180,5 +184,22 @@ template std::uint32_t Accel::occluded<8>(const RayPacket<8>&) const;
 template std::uint32_t Accel::occluded<16>(const RayPacket<16>&) const;
 
 AccelInfo Accel::info() const { return impl_->info(); }
+
+void Accel::save(const std::string& path) const {
+  if (!impl_->committed) throw Error("save: call commit() first (only a committed structure is saved)");
+  impl_->save_to(path);
+}
+
+Accel Accel::load(const std::string& path) {
+  const auto start = std::chrono::steady_clock::now();
+  Accel accel;
+  try {
+    accel.impl_->load_from(path);
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemory("load: " + path + ": out of memory");
+  }
+  accel.impl_->load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return accel;
+}
 
 }  // namespace volley

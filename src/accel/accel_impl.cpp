@@ -50,7 +50,7 @@ bool all_lanes_active(const RayPacket<K>& p) {
 
 std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, bool polygon) {
   if (geometries.size() >= kInvalidId) throw Error("add: the Accel holds the most geometries it can");
-  geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon});
+  geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon, true, {}, 0, false});
   committed = false;
   topology_changed = true;
   return static_cast<std::uint32_t>(geometries.size() - 1);
@@ -93,13 +93,7 @@ void Accel::Impl::build() {
   // geometries (update_vertices) go into the tree even when degenerate, so that a refit
   // finds them where a later move gives them area.
   std::vector<unsigned char> left_out(n, 0), moving(n, 0);
-  enabled_polygons.clear();
-  enabled_polygon_ids.clear();
   for (const Geometry& g : geometries) {
-    if (g.enabled && g.polygon) {
-      enabled_polygons.push_back(polygons[g.index]);
-      enabled_polygon_ids.push_back(polygon_ids[g.index]);
-    }
     if (g.moved) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
     if (g.enabled) continue;
     ++disabled;
@@ -130,8 +124,24 @@ void Accel::Impl::build() {
     triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, excluded.data()});
     built_sah = sah_now = triangle_engine->sah_cost();
   }
+  build_polygons();
+  finish_build();
+}
+
+void Accel::Impl::build_polygons() {
+  polygon_engine.reset();
+  enabled_polygons.clear();
+  enabled_polygon_ids.clear();
+  for (const Geometry& g : geometries)
+    if (g.enabled && g.polygon) {
+      enabled_polygons.push_back(polygons[g.index]);
+      enabled_polygon_ids.push_back(polygon_ids[g.index]);
+    }
   if (!enabled_polygons.empty())
     polygon_engine = accel::make_polygon_engine(enabled_polygons, enabled_polygon_ids, robust);
+}
+
+void Accel::Impl::finish_build() {
   wide_only = triangle_engine && !polygon_engine ? triangle_engine->wide() : nullptr;
   one_geometry = geometries.size() == 1;
   topology_changed = vertices_changed = refitted = false;
@@ -262,7 +272,9 @@ template std::uint32_t Accel::Impl::occluded<16>(const RayPacket<16>&) const;
 
 AccelInfo Accel::Impl::info() const {
   AccelInfo info;
-  info.triangles = triangle_ids.size();
+  info.triangles = triangle_count();
+  info.loaded = loaded;
+  info.load_seconds = loaded ? load_seconds : 0.0;
   info.degenerate = degenerate;
   info.polygons = polygons.size();
   info.geometries = geometries.size();

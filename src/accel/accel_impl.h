@@ -4,10 +4,14 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "accel/accel_file.h"
 #include "accel/engine.h"
 #include "accel/wide_accel.h"
 #include "core/bvh.h"
@@ -64,6 +68,19 @@ struct Accel::Impl {
   std::unique_ptr<accel::Engine> polygon_engine;
   std::vector<core::Polygon> enabled_polygons;  ///< what polygon_engine holds (enabled geometries)
   std::vector<std::uint32_t> enabled_polygon_ids;
+  /// A loaded Accel's triangle input, still in the mapped file (Accel::load): unpack() copies
+  /// it into the vectors above before anything reads them (a query does not).
+  struct Packed {
+    std::shared_ptr<const accel::file::Mapping> file;
+    std::span<const float> vertices;  ///< the triangle geometries' vertices, geometry after geometry
+    std::span<const std::uint32_t> indices;
+    std::span<const unsigned char> excluded, excluded_flat;
+  };
+  std::optional<Packed> packed;
+  std::size_t loaded_triangles = 0;  ///< the triangles while packed
+  bool loaded = false;               ///< the structure came from a file (AccelInfo::loaded)
+  double load_seconds = 0.0;
+
   /// The wide BVH when it holds the whole scene (no polygons), else null: Accel's single-ray
   /// queries and full packets call it directly (a layer of calls less).
   const accel::WideAccel* wide_only = nullptr;
@@ -83,11 +100,25 @@ struct Accel::Impl {
     attribute_search(prim, geom);
   }
 
+  /// Triangles added (also while packed).
+  std::size_t triangle_count() const { return packed ? loaded_triangles : triangle_ids.size(); }
+  /// Copies a loaded Accel's input out of the file (a no-op otherwise): called before the
+  /// input is changed or built from.
+  void unpack();
+  /// Writes the committed structure and its input (accel_save.cpp).
+  void save_to(const std::string& path) const;
+  /// Fills a fresh Impl from a saved file, committed (accel_load.cpp). Throws Error.
+  void load_from(const std::string& path);
+
   /// Builds every engine for the committed options (test, isa, robust, reference_double).
   void build();
   /// Refits the triangle engine to moved vertices when that is allowed and pays (see
   /// Options::refit); false (nothing built) when the caller must build instead.
   bool refit(const Options& options);
+  /// Builds the polygon engine over the enabled polygon geometries (none: no engine).
+  void build_polygons();
+  /// Sets wide_only, one_geometry and the refit state after a build or a load.
+  void finish_build();
   Hit intersect(const Ray& ray) const;
   bool occluded(const Ray& ray) const;
   template <int K>
@@ -100,6 +131,10 @@ struct Accel::Impl {
   AccelInfo info() const;
 
  private:
+  /// load(): the geometry table into `geometries`, checked against itself and the meta
+  /// chunk; `vertex_total` = the triangle geometries' vertices.
+  void read_geometries(accel::file::Reader& in, const accel::file::Meta& meta,
+                       std::span<const accel::file::GeometryRecord> records, std::uint64_t& vertex_total);
   /// Whether triangle i has no area (in double with reference_double).
   bool flat(std::size_t i) const;
   /// attribute() for a scene of several geometries: a binary search of the first ids.

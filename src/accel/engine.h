@@ -75,6 +75,8 @@ class TriangleEngine : public Engine {
 /// The wide BVH over triangle blocks with the SIMD kernels of `test` on `isa` (resolved, not
 /// scalar); robust = false drops the slab padding.
 std::unique_ptr<TriangleEngine> make_wide_engine(TriangleTest test, Isa isa, bool robust);
+/// The SIMD engine over a WideAccel that adopted a saved structure (Accel::load).
+std::unique_ptr<TriangleEngine> make_wide_engine(std::unique_ptr<WideAccel> adopted);
 /// The scalar oracle: the binary BVH and the float triangle test, as core/ defines them.
 std::unique_ptr<TriangleEngine> make_oracle_engine(TriangleTest test, bool robust);
 /// The accuracy reference (Options::reference_double): the oracle's traversal with robust

@@ -34,7 +34,7 @@ void Accel::Impl::intersect(const Ray* rays, std::size_t count, Hit* hits) const
     const std::size_t n = std::min<std::size_t>(16, count - first);
     if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
       RayPacket<16> p;
-      load(p, rays + first, 16);
+      volley::load(p, rays + first, 16);
       HitPacket<16> h;
       reset(h);
       intersect(p, h);
@@ -50,7 +50,7 @@ void Accel::Impl::occluded(const Ray* rays, std::size_t count, std::uint8_t* blo
     const std::size_t n = std::min<std::size_t>(16, count - first);
     if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
       RayPacket<16> p;
-      load(p, rays + first, 16);
+      volley::load(p, rays + first, 16);
       const std::uint32_t mask = occluded(p);
       for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
     } else {

@@ -3,6 +3,8 @@
 // simd/wide_traverse.h), so nothing here is compiled with wider instructions.
 #include "accel/wide_accel.h"
 
+#include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -29,10 +31,44 @@ class WideAccelFor final : public WideAccel {
 
   void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) override {
     stats_ = build_wide<Test, W>(bvh, xyz, ids, nodes_, blocks_, root_);
+    adopted_ = {};
     view_ = {nodes_.data(), blocks_.data(), root_};
   }
   void refit(const float* xyz, const std::uint32_t* index_of) override {
+    if (adopted_.owner) {
+      // The structure lies in a read-only mapped file: refit a copy of it.
+      const auto* nodes = static_cast<const simd::WideNode<simd::kWideN>*>(adopted_.nodes);
+      const auto* blocks = static_cast<const Block*>(adopted_.blocks);
+      nodes_.assign(nodes, nodes + adopted_.node_count);
+      blocks_.assign(blocks, blocks + adopted_.block_count);
+      adopted_ = {};
+      view_ = {nodes_.data(), blocks_.data(), root_};
+    }
     stats_ = refit_wide<Test, W>(xyz, index_of, nodes_, blocks_, stats_);
+  }
+  WideImage image() const override {
+    const std::size_t node_count = adopted_.owner ? adopted_.node_count : nodes_.size();
+    const std::size_t block_count = adopted_.owner ? adopted_.block_count : blocks_.size();
+    return {view_.nodes, node_count, view_.blocks, block_count, sizeof(Block), root_, stats_, adopted_.owner};
+  }
+  std::size_t block_bytes() const override { return sizeof(Block); }
+  std::size_t prim_offset() const override { return offsetof(Block, prim); }
+  void adopt(WideImage image) override {
+    if (image.block_bytes != sizeof(Block))
+      throw std::invalid_argument("triangle blocks of " + std::to_string(image.block_bytes) + " bytes, expected " +
+                                  std::to_string(sizeof(Block)) + " for this test and ISA");
+    if (reinterpret_cast<std::uintptr_t>(image.nodes) % simd::kAlign != 0 ||
+        reinterpret_cast<std::uintptr_t>(image.blocks) % simd::kAlign != 0)
+      throw std::invalid_argument("nodes or blocks not 64-byte aligned");
+    const auto* nodes = static_cast<const simd::WideNode<simd::kWideN>*>(image.nodes);
+    const auto* blocks = static_cast<const Block*>(image.blocks);
+    image.stats.depth = check_wide_tree(nodes, image.node_count, image.block_count, image.root);
+    nodes_.clear();
+    blocks_.clear();
+    root_ = image.root;
+    stats_ = image.stats;
+    view_ = {nodes, blocks, root_};
+    adopted_ = std::move(image);
   }
   const simd::WideStats& stats() const override { return stats_; }
 
@@ -47,6 +83,7 @@ class WideAccelFor final : public WideAccel {
   simd::AlignedVector<Block> blocks_;
   std::uint32_t root_ = simd::wide_ref::kEmptyRef;
   simd::WideStats stats_;
+  WideImage adopted_;  ///< a loaded structure that view_ reads in place (owner set), else empty
 };
 
 template <class Arch, bool Robust>

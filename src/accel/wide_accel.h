@@ -2,8 +2,10 @@
 // triangle blocks, forwards queries to the traversal kernels instantiated in the per-ISA
 // files (simd/wide_traverse.h). No xsimd here: Accel compiles at the baseline ISA.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "core/bvh.h"
 #include "simd/wide_bvh.h"
@@ -12,6 +14,26 @@
 #include "volley/ray.h"
 
 namespace volley::accel {
+
+/// A built wide BVH as plain memory (Accel::save writes it, Accel::load maps it back).
+struct WideImage {
+  const void* nodes = nullptr;  ///< node_count WideNode<kWideN>, 64-byte aligned
+  std::size_t node_count = 0;
+  const void* blocks = nullptr;  ///< block_count blocks of block_bytes each, 64-byte aligned
+  std::size_t block_count = 0;
+  std::size_t block_bytes = 0;
+  std::uint32_t root = simd::wide_ref::kEmptyRef;
+  simd::WideStats stats;
+  /// Keeps nodes and blocks alive while the WideAccel uses them (the mapped file).
+  std::shared_ptr<const void> owner;
+};
+
+/// What the triangle blocks of an image may name: ids below `id_limit`, none of `not_triangles`
+/// (sorted; the polygons' ids).
+struct ImageIds {
+  std::uint32_t id_limit;
+  const std::vector<std::uint32_t>* not_triangles;
+};
 
 /// A wide BVH over triangle blocks for one (test, ISA). Built once with build(); then
 /// immutable, and every query is const and thread-safe. Answers agree with the scalar
@@ -32,6 +54,18 @@ class WideAccel {
   /// Refits the built BVH to moved triangles (refit_wide): triangle with id `id` now has
   /// vertices xyz[9 * index_of[id] ..]. Not thread-safe (no query may run).
   virtual void refit(const float* xyz, const std::uint32_t* index_of) = 0;
+  /// The built structure as memory (valid while this WideAccel lives and is not rebuilt).
+  virtual WideImage image() const = 0;
+  /// Takes a saved structure and queries it in place (a refit copies it first). Checks it
+  /// as untrusted input: the block layout, every child reference in range and met once,
+  /// children after their parent, depth within the walks' stacks (check_wide_tree); the
+  /// blocks' triangle ids are the caller's to check (check_block_ids, while it reads them).
+  /// Throws std::invalid_argument saying what is wrong (nothing adopted).
+  virtual void adopt(WideImage image) = 0;
+  /// Bytes of one triangle block.
+  virtual std::size_t block_bytes() const = 0;
+  /// Where a block keeps its W triangle ids (offsetof(Block, prim)).
+  virtual std::size_t prim_offset() const = 0;
   /// Size and quality of the built structure.
   virtual const simd::WideStats& stats() const = 0;
 
@@ -57,5 +91,22 @@ class WideAccel {
   explicit WideAccel(SingleRay single) : single_(single) {}
   SingleRay single_;
 };
+
+}  // namespace volley::accel
+
+namespace volley::accel {
+
+/// The tree check of WideAccel::adopt over the nodes of an image (wide_image.cpp): every
+/// reference in range and met once, interior children after their parent, leaves within
+/// `block_count`, depth within core::kBvhMaxDepth (the walks' stacks). Returns the deepest leaf's
+/// depth (WideStats::depth);
+/// throws std::invalid_argument naming the first fault.
+std::size_t check_wide_tree(const simd::WideNode<simd::kWideN>* nodes, std::size_t node_count,
+                            std::size_t block_count, std::uint32_t root);
+
+/// Checks the triangle ids of whole blocks laid out as `layout`'s (from block `first_block`
+/// on, for the message): each kInvalidPrim or allowed by `ids`. Throws std::invalid_argument.
+void check_block_ids(const unsigned char* blocks, std::size_t count, std::size_t first_block, const WideAccel& layout,
+                     const ImageIds& ids);
 
 }  // namespace volley::accel

@@ -1,5 +1,6 @@
 // The SIMD engine: the wide BVH over triangle blocks (WideAccel) and its kernels.
 #include <memory>
+#include <utility>
 
 #include "accel/engine.h"
 #include "accel/wide_accel.h"
@@ -29,6 +30,7 @@ core::BvhBuildOptions wide_build_options(int w) {
 class WideEngine final : public TriangleEngine {
  public:
   WideEngine(TriangleTest test, Isa isa, bool robust) : accel_(WideAccel::create(test, isa, robust)) {}
+  explicit WideEngine(std::unique_ptr<WideAccel> accel) : accel_(std::move(accel)) {}
 
   core::BvhBuildOptions bvh_options() const override { return wide_build_options(accel_->block_width()); }
   void build(core::Bvh bvh, const Triangles& t) override {
@@ -76,6 +78,10 @@ class WideEngine final : public TriangleEngine {
 };
 
 }  // namespace
+
+std::unique_ptr<TriangleEngine> make_wide_engine(std::unique_ptr<WideAccel> adopted) {
+  return std::make_unique<WideEngine>(std::move(adopted));
+}
 
 std::unique_ptr<TriangleEngine> make_wide_engine(TriangleTest test, Isa isa, bool robust) {
   return std::make_unique<WideEngine>(test, isa, robust);

@@ -272,7 +272,30 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.disabled = a.disabled;
     out.refitted = a.refitted ? 1 : 0;
     out.sah_growth = a.sah_growth;
+    out.loaded = a.loaded ? 1 : 0;
+    out.load_seconds = a.load_seconds;
     *info = out;
+  });
+}
+
+volley_status volley_scene_save(const volley_scene* scene, const char* path) {
+  return guarded("volley_scene_save", VOLLEY_ERROR_FILE, [&] {
+    require_pointer(path, "path");
+    require_committed(scene);
+    scene->accel.save(path);
+  });
+}
+
+volley_status volley_scene_load(const char* path, volley_scene** out) {
+  return guarded("volley_scene_load", VOLLEY_ERROR_FILE, [&] {
+    require_pointer(path, "path");
+    require_pointer(out, "out");
+    auto scene = std::make_unique<volley_scene>();
+    scene->accel = volley::Accel::load(path);
+    const volley::AccelInfo info = scene->accel.info();
+    scene->prims = info.triangles + info.polygons;
+    scene->committed = true;
+    *out = scene.release();
   });
 }
 

@@ -50,6 +50,7 @@ const char* volley_status_string(volley_status status) {
     case VOLLEY_ERROR_OUT_OF_MEMORY: return "VOLLEY_ERROR_OUT_OF_MEMORY";
     case VOLLEY_ERROR_INVALID_RAY: return "VOLLEY_ERROR_INVALID_RAY";
     case VOLLEY_ERROR_INTERNAL: return "VOLLEY_ERROR_INTERNAL";
+    case VOLLEY_ERROR_FILE: return "VOLLEY_ERROR_FILE";
   }
   return "unknown status";
 }

@@ -39,6 +39,8 @@ struct TraceArgs {
   std::string scene;
   std::string rays;
   std::string output;
+  std::string save;  ///< write the built structure here
+  std::string load;  ///< map the structure from here instead of building it
   bool occluded = false;
   std::string mode = "single";
   int packet = 16;
@@ -145,15 +147,22 @@ Runner register_trace(CLI::App& app) {
   cmd->add_option("--reps", args->reps, "Timed repetitions; the best is reported")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  cmd->add_option("--save", args->save,
+                  "Write the built structure to this file (Accel::save), to --load it later instead of building");
+  cmd->add_option("--load", args->load,
+                  "Map the structure from a file --save wrote for this scene instead of building it (its test and\n"
+                  "ISA are the file's: --test and --isa are ignored)")
+      ->check(CLI::ExistingFile);
   add_kernel_options(*cmd, args->kernel);
 
   return [args]() {
     const TraceArgs& a = *args;
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
-    const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel));
+    const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel), a.load);
     const Accel& accel = scene.accel();
     const AccelInfo info = accel.info();
+    if (!a.save.empty()) accel.save(a.save);
 
     const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
@@ -185,11 +194,12 @@ Runner register_trace(CLI::App& app) {
                 a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
                 info.reference_double ? 1 : 0);
     std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
-                "%.2f Mrays/s; %zu %s (%.1f%%); BVH built in %.3f s\n",
+                "%.2f Mrays/s; %zu %s (%.1f%%); %s %.3f s\n",
                 a.scene.c_str(), rays.size(), a.rays.c_str(), a.occluded ? "occlusion" : "closest hit", mode.c_str(),
                 test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
                 hit_count, a.occluded ? "blocked" : "hit", rays.empty() ? 0.0 : 100.0 * double(hit_count) / double(rays.size()),
-                info.build_seconds);
+                info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
+    if (!a.save.empty()) std::printf("saved the structure to %s\n", a.save.c_str());
 
     if (!a.output.empty()) {
       if (a.occluded) {

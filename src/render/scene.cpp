@@ -43,7 +43,7 @@ core::Camera make_camera(const io::SceneDesc& desc, const Bounds& b, int width, 
 
 }  // namespace
 
-Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& options)
+Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& options, const std::string& structure)
     : camera_(make_camera(desc, scene_bounds(desc), width, height)),
       materials_(desc.materials),
       lights_(desc.lights),
@@ -68,16 +68,18 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   // per polygon; prim_index() turns a hit back into the merged mesh's numbering.
   std::vector<io::ObjectDesc> objects = desc.mesh.objects;
   if (objects.empty() && !indices_.empty()) objects.push_back({"mesh", 0, indices_.size() / 3});
+  const bool load = !structure.empty();
   for (const io::ObjectDesc& o : objects) {
     if (positions_.empty()) break;
-    accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data() + 3 * o.first_triangle,
-                         o.triangle_count);
+    if (!load)
+      accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data() + 3 * o.first_triangle,
+                           o.triangle_count);
     geometry_base_.push_back(static_cast<std::uint32_t>(o.first_triangle));
   }
   for (const auto& poly : desc.polygons) {
     geometry_base_.push_back(static_cast<std::uint32_t>(indices_.size() / 3 + polygons_.size()));
     try {
-      accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
+      if (!load) accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
     } catch (const Error& e) {
       throw Error("polygon '" + poly.name + "': " + e.what());
     }
@@ -94,7 +96,19 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     centroid /= double(v.size());
     polygons_.push_back({unit, float(glm::dot(glm::dvec3(unit), centroid)), poly.material});
   }
-  accel_.commit(options);
+  if (load) {
+    accel_ = Accel::load(structure);
+    const AccelInfo info = accel_.info();
+    if (info.geometries != geometry_base_.size() || info.triangles != indices_.size() / 3 ||
+        info.polygons != polygons_.size())
+      throw Error(structure + " holds " + std::to_string(info.geometries) + " geometries (" +
+                  std::to_string(info.triangles) + " triangles, " + std::to_string(info.polygons) +
+                  " polygons), the scene " + std::to_string(geometry_base_.size()) + " (" +
+                  std::to_string(indices_.size() / 3) + ", " + std::to_string(polygons_.size()) +
+                  "): it was saved from another scene");
+  } else {
+    accel_.commit(options);
+  }
 
   features_.lights = !lights_.empty();
   features_.polygons = !polygons_.empty();

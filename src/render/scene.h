@@ -47,7 +47,10 @@ class Scene {
   /// Builds from a loaded description. `width`/`height` size the camera; a description
   /// without a camera (a bare mesh) gets one framing its bounds, and one without lights a
   /// light above the camera. Throws volley::Error for invalid geometry (naming the polygon).
-  Scene(const io::SceneDesc& desc, int width, int height, const Options& options);
+  /// With `structure` (a file Accel::save wrote for this scene: `volley trace --save`) the
+  /// Accel is loaded from it instead of built (its options are the file's); Error when the
+  /// file's geometries do not match the scene's.
+  Scene(const io::SceneDesc& desc, int width, int height, const Options& options, const std::string& structure = {});
 
   const Accel& accel() const { return accel_; }
   /// A hit's primitive in the merged numbering of positions() / indices() (triangles

@@ -37,6 +37,7 @@ struct AccelInfo {
   std::size_t polygons = 0;        ///< planar polygons added
   std::size_t geometries = 0;      ///< geometries (one per add_triangles / add_polygon call)
   std::size_t disabled = 0;        ///< geometries disabled at the commit (left out of the structure)
+  bool loaded = false;             ///< the structure was mapped from a file (Accel::load), not built here
   bool refitted = false;           ///< the last commit refitted the BVH (Options::refit) instead of building it
   double sah_growth = 1.0;         ///< triangle SAH cost now / at the last full build (1 after a build)
   std::size_t nodes = 0;           ///< BVH nodes (wide: interior nodes; binary: all nodes)
@@ -46,7 +47,8 @@ struct AccelInfo {
   double binary_sah_cost = 0.0;    ///< the same for the binary binned-SAH BVH it was collapsed from
   double mean_leaf_size = 0.0;     ///< primitives per leaf
   std::size_t bytes = 0;           ///< memory of nodes + primitive data (triangle blocks)
-  double build_seconds = 0.0;      ///< wall time of commit
+  double build_seconds = 0.0;      ///< wall time of commit (of the original commit for a loaded one)
+  double load_seconds = 0.0;       ///< wall time of Accel::load (0 when built here)
   int width = 2;                   ///< children per node of the triangle BVH
   int block_width = 1;             ///< triangles per block (SIMD lanes of the leaf kernels)
   std::size_t blocks = 0;          ///< triangle blocks (0 for scalar)
@@ -148,6 +150,23 @@ class VOLLEY_API Accel {
 
   /// Facts about the committed structure.
   AccelInfo info() const;
+
+  /// Writes the committed structure to `path` (replacing a file there; written under
+  /// `path`.tmp first, so a failed save leaves no partial file): the wide BVH and triangle
+  /// blocks as built, the geometries with their vertices, indices and flags, the options,
+  /// the test and ISA it was built for, a format version and a checksum. load() maps it
+  /// back. Throws Error when not committed or when the file cannot be written.
+  void save(const std::string& path) const;
+
+  /// An Accel mapped from a file save() wrote, committed and ready to query, with the same
+  /// answers as the one saved. The wide BVH is queried where it lies in the mapped file (no
+  /// build, no copy); the geometry comes back into memory only when it is changed or the
+  /// Accel is committed again (it can be changed as before: add, update_vertices, refit).
+  /// Structures committed with Isa::scalar are rebuilt from the saved geometry. Throws Error
+  /// naming the path and the fault for a file that is missing, not a volley structure, of
+  /// another format version, truncated, corrupted (checksum), built for an ISA this CPU
+  /// lacks, or inconsistent in any count, id or reference.
+  static Accel load(const std::string& path);
 
  private:
   struct Impl;

@@ -70,7 +70,10 @@ typedef enum volley_status {
   VOLLEY_ERROR_UNSUPPORTED_ISA = 5,  /**< this CPU cannot run the requested ISA (or VOLLEY_ISA is bad) */
   VOLLEY_ERROR_OUT_OF_MEMORY = 6,    /**< an allocation failed */
   VOLLEY_ERROR_INVALID_RAY = 7,      /**< from volley_validate_rays only: a ray that can never hit */
-  VOLLEY_ERROR_INTERNAL = 8          /**< anything else: a bug in volley, please report it */
+  VOLLEY_ERROR_INTERNAL = 8,         /**< anything else: a bug in volley, please report it */
+  VOLLEY_ERROR_FILE = 9              /**< a structure file could not be written or read, or is not valid: missing,
+                                          not a volley file, another format version, truncated, corrupted,
+                                          inconsistent, or built for an ISA this CPU lacks (the message says which) */
 } volley_status;
 
 /** Ray/triangle test, fixed at commit (same as volley::TriangleTest). */
@@ -188,6 +191,8 @@ typedef struct volley_scene_info {
   size_t disabled;           /**< geometries left out at the last commit */
   int refitted;              /**< nonzero: the last commit refitted the BVH instead of building it */
   double sah_growth;         /**< SAH cost of the triangle BVH now / at the last full build */
+  int loaded;                /**< nonzero: the structure was mapped from a file (volley_scene_load), not built */
+  double load_seconds;       /**< wall time of volley_scene_load (0 when built) */
 } volley_scene_info;
 
 /** A scene: triangles and polygons plus the acceleration structure built over them.
@@ -273,6 +278,24 @@ VOLLEY_API volley_status volley_scene_enable_geometry(volley_scene* scene, uint3
  *  the VOLLEY_ISA environment variable names a bad or unsupported ISA); the scene is
  *  then unchanged (and still committed if it was). */
 VOLLEY_API volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa);
+
+/** Writes the committed scene's structure to `path` (volley::Accel::save): the BVH and
+ *  triangle blocks as built, the geometries with their vertices, indices and flags, the
+ *  options, the test and ISA, a format version and a checksum. Written to `path`.tmp first
+ *  and then renamed: a failed save leaves no partial file at `path`.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or path; VOLLEY_ERROR_NOT_COMMITTED;
+ *  VOLLEY_ERROR_FILE when the file cannot be written. */
+VOLLEY_API volley_status volley_scene_save(const volley_scene* scene, const char* path);
+
+/** Creates in *out a committed scene mapped from a file volley_scene_save wrote
+ *  (volley::Accel::load): ready to query with the same answers as the scene saved, without
+ *  a build (the BVH is queried where it lies in the mapped file). It can be changed and
+ *  committed again like any scene. The caller owns it (volley_scene_destroy).
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL path or out; VOLLEY_ERROR_FILE for a
+ *  file that is missing, not a volley structure, of another format version, truncated,
+ *  corrupted (checksum), inconsistent, or built for an ISA this CPU lacks;
+ *  VOLLEY_ERROR_OUT_OF_MEMORY. *out is left as it was on error. */
+VOLLEY_API volley_status volley_scene_load(const char* path, volley_scene** out);
 
 /** Everything volley_scene_commit_ex can set (volley::Options). Fill it with
  *  volley_commit_options_default first, then change what you need: fields may be added at

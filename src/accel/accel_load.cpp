@@ -1,0 +1,191 @@
+// Accel::load: maps a file Accel::save wrote and checks it as untrusted input (accel_file.h
+// checks the header and the checksum; here every count, id and index is checked against
+// the others before anything uses it) before the wide BVH is queried where it lies.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "accel/accel_file.h"
+#include "accel/accel_impl.h"
+#include "accel/wide_accel.h"
+#include "core/polygon.h"
+#include "simd/dispatch.h"
+
+namespace volley {
+namespace {
+
+bool is_bool(std::uint32_t x) { return x <= 1; }
+
+}  // namespace
+
+void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Meta& meta,
+                                  std::span<const accel::file::GeometryRecord> records, std::uint64_t& vertex_total) {
+  std::vector<Geometry>& out = geometries;
+  if (records.size() != meta.geometries) in.fail("the geometry table does not match the meta chunk");
+  std::uint64_t id = 0, triangles = 0, polygons = 0, disabled = 0;
+  vertex_total = 0;
+  out.reserve(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const accel::file::GeometryRecord& r = records[i];
+    const std::string which = "geometry " + std::to_string(i);
+    if (!is_bool(r.polygon) || !is_bool(r.enabled) || !is_bool(r.moved) || (r.polygon && r.moved))
+      in.fail(which + " has invalid flags");
+    if (r.first != id) in.fail(which + " starts at id " + std::to_string(r.first) + ", expected " + std::to_string(id));
+    if (r.count > std::uint64_t{kInvalidPrim} - 1 - id) in.fail(which + " has too many primitives");
+    if (r.polygon ? (r.count != 1 || r.index != polygons || r.vertex_count != 0)
+                  : (r.index != triangles || r.vertex_count > (std::uint64_t{1} << 40)))
+      in.fail(which + " does not follow the ones before it");
+    (r.polygon ? polygons : triangles) += r.count;
+    if (!r.polygon) vertex_total += r.vertex_count;
+    disabled += !r.enabled;
+    id += r.count;
+    out.push_back({r.first, r.count, static_cast<std::size_t>(r.index), r.polygon != 0, r.enabled != 0, {},
+                   static_cast<std::size_t>(r.vertex_count), r.moved != 0});
+  }
+  if (triangles != meta.triangles || polygons != meta.polygons || id != meta.next_id || disabled != meta.disabled ||
+      meta.degenerate > meta.triangles)
+    in.fail("the geometry table's counts do not match the meta chunk");
+}
+
+void Accel::Impl::load_from(const std::string& path) {
+  namespace file = accel::file;
+  auto mapping = std::make_shared<const file::Mapping>(path);
+  file::Reader in(mapping, path);
+  const file::Header& h = in.header();
+  if (h.test > static_cast<std::uint32_t>(TriangleTest::watertight) || h.isa > static_cast<std::uint32_t>(Isa::avx512) ||
+      h.isa == static_cast<std::uint32_t>(Isa::automatic) || !is_bool(h.robust) || !is_bool(h.reference_double))
+    in.fail("the header's options are not valid");
+  test = static_cast<TriangleTest>(h.test);
+  isa = static_cast<Isa>(h.isa);
+  robust = h.robust != 0;
+  reference_double = h.reference_double != 0;
+  if (reference_double && (isa != Isa::scalar || !robust)) in.fail("reference_double with a SIMD ISA or plain slabs");
+  if (!simd::cpu_has(isa))
+    in.fail("built for " + std::string(to_string(isa)) +
+            ", which this CPU lacks (build the structure here, or save it with an ISA this CPU has)");
+
+  const file::Meta& meta = in.one<file::Meta>(file::Tag::meta);
+  std::uint64_t vertex_total = 0;
+  read_geometries(in, meta, in.next<file::GeometryRecord>(file::Tag::geometries), vertex_total);
+  const auto vertices = in.next<float>(file::Tag::vertices, [&](std::span<const float> slab) {
+    for (const float x : slab)
+      if (!std::isfinite(x)) in.fail("a triangle vertex is not finite");
+  });
+  // The indices, geometry after geometry, each below its geometry's vertex count.
+  auto geometry = geometries.begin();
+  std::uint64_t left = 0;  // indices of *geometry still to come
+  const auto indices = in.next<std::uint32_t>(file::Tag::indices, [&](std::span<const std::uint32_t> slab) {
+    for (std::size_t k = 0; k < slab.size();) {
+      while (left == 0) {
+        if (geometry == geometries.end()) in.fail("more triangle indices than triangles");
+        if (!geometry->polygon && geometry->count != 0) {
+          left = 3 * std::uint64_t{geometry->count};
+        } else {
+          ++geometry;
+        }
+      }
+      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, slab.size() - k));
+      std::uint32_t largest = 0;
+      for (std::size_t i = k; i < k + n; ++i) largest = std::max(largest, slab[i]);
+      if (n != 0 && largest >= geometry->vertex_count)
+        in.fail("geometry " + std::to_string(geometry - geometries.begin()) + " has a vertex index out of range");
+      k += n, left -= n;
+      if (left == 0) ++geometry;
+    }
+  });
+  const auto polygon_sizes = in.next<std::uint32_t>(file::Tag::polygon_sizes);
+  const auto polygon_vertices = in.next<float>(file::Tag::polygon_vertices);
+  const auto excluded_in = in.next<unsigned char>(file::Tag::excluded);
+  const auto excluded_flat_in = in.next<unsigned char>(file::Tag::excluded_flat);
+  if (vertices.size() != 3 * vertex_total || indices.size() != 3 * meta.triangles ||
+      polygon_sizes.size() != meta.polygons || excluded_in.size() != meta.triangles ||
+      excluded_flat_in.size() != meta.triangles)
+    in.fail("the input chunks' sizes do not match the geometry table");
+  for (const Geometry& g : geometries)
+    if (g.polygon) polygon_ids.push_back(g.first);
+
+  // The wide BVH: its blocks' triangle ids checked while they are read, its tree after.
+  std::unique_ptr<accel::WideAccel> wide;
+  if (isa != Isa::scalar) {
+    wide = accel::WideAccel::create(test, isa, robust);
+    if (meta.triangles != 0 &&
+        (h.node_bytes != sizeof(simd::WideNode<simd::kWideN>) || h.block_bytes != wide->block_bytes()))
+      in.fail("the wide BVH's node or block size does not match this build of volley");
+  }
+  const auto nodes = in.next<unsigned char>(file::Tag::nodes);
+  const std::size_t block_bytes = wide ? wide->block_bytes() : 1;
+  std::size_t blocks_seen = 0;
+  const accel::ImageIds ids{static_cast<std::uint32_t>(meta.next_id), &polygon_ids};
+  const auto blocks = in.next_items(file::Tag::blocks, block_bytes, [&](std::span<const unsigned char> slab) {
+    const std::size_t count = slab.size() / block_bytes;
+    try {
+      accel::check_block_ids(slab.data(), count, blocks_seen, *wide, ids);
+    } catch (const std::invalid_argument& e) {
+      in.fail(e.what());
+    }
+    blocks_seen += count;
+  });
+  in.finish();
+  if (wide && meta.triangles == 0 && (!nodes.empty() || !blocks.empty())) in.fail("wide nodes without triangles");
+  if (!wide && (!nodes.empty() || !blocks.empty())) in.fail("a scalar structure with wide nodes");
+  if (nodes.size() % sizeof(simd::WideNode<simd::kWideN>) != 0) in.fail("the nodes chunk holds part of a node");
+
+  // Polygons: few, rebuilt from their outlines (make_polygon checks each again).
+  std::size_t at = 0;
+  for (const Geometry& g : geometries) {
+    if (!g.polygon) continue;
+    const std::uint32_t n = polygon_sizes[polygons.size()];
+    if (n > (polygon_vertices.size() - at) / 3) in.fail("the polygon outlines run past their chunk");
+    std::vector<glm::vec3> outline(n);
+    for (std::uint32_t i = 0; i < n; ++i, at += 3)
+      outline[i] = {polygon_vertices[at], polygon_vertices[at + 1], polygon_vertices[at + 2]};
+    try {
+      polygons.push_back(core::make_polygon(std::move(outline)));
+    } catch (const std::invalid_argument& e) {
+      in.fail("polygon geometry " + std::to_string(&g - geometries.data()) + ": " + e.what());
+    }
+  }
+  if (at != polygon_vertices.size()) in.fail("the polygon outlines do not fill their chunk");
+
+  next_id = static_cast<std::uint32_t>(meta.next_id);
+  degenerate = meta.degenerate;
+  disabled = meta.disabled;
+  packed = Packed{mapping, vertices, indices, excluded_in, excluded_flat_in};
+  loaded_triangles = meta.triangles;
+  if (!wide) {
+    // The oracle's structures are for checking, not speed: rebuilt from the input.
+    unpack();
+    build();
+  } else {
+    if (meta.triangles != 0) {
+      accel::WideImage image;
+      image.nodes = nodes.data(), image.node_count = nodes.size() / sizeof(simd::WideNode<simd::kWideN>);
+      image.blocks = blocks.data(), image.block_count = blocks.size() / block_bytes;
+      image.block_bytes = block_bytes;
+      image.root = meta.root;
+      image.stats = {meta.wide_nodes,     meta.wide_leaves,        meta.wide_depth,    meta.wide_blocks,
+                     meta.wide_triangles, meta.wide_mean_children, meta.wide_sah_cost, meta.wide_block_sah_cost,
+                     meta.wide_bytes};
+      image.owner = mapping;
+      try {
+        wide->adopt(std::move(image));
+      } catch (const std::invalid_argument& e) {
+        in.fail(e.what());
+      }
+      triangle_engine = accel::make_wide_engine(std::move(wide));
+      triangle_stats = {meta.bvh_nodes, meta.bvh_leaves, meta.bvh_depth, meta.bvh_sah_cost, meta.bvh_mean_leaf_size,
+                        meta.bvh_bytes};
+    }
+    build_polygons();
+    finish_build();
+  }
+  built_sah = meta.built_sah;
+  sah_now = meta.sah_now;
+  refitted = meta.refitted != 0;
+  build_seconds = meta.build_seconds;
+  loaded = true;
+  committed = true;
+}
+
+}  // namespace volley

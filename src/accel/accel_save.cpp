@@ -1,0 +1,120 @@
+// Accel::save: the committed structure and the input it was built from, as accel_file.h
+// lays them out; and unpack(), which brings a loaded Accel's input back into its vectors.
+#include <cstring>
+#include <vector>
+
+#include "accel/accel_file.h"
+#include "accel/accel_impl.h"
+#include "accel/wide_accel.h"
+
+namespace volley {
+
+void Accel::Impl::save_to(const std::string& path) const {
+  namespace file = accel::file;
+  const accel::WideAccel* wide = triangle_engine ? triangle_engine->wide() : nullptr;
+  const accel::WideImage image = wide ? wide->image() : accel::WideImage{};
+
+  file::Meta meta{};
+  meta.geometries = geometries.size();
+  meta.triangles = triangle_count();
+  meta.polygons = polygons.size();
+  meta.next_id = next_id;
+  meta.degenerate = degenerate;
+  meta.disabled = disabled;
+  meta.built_sah = built_sah;
+  meta.sah_now = sah_now;
+  meta.build_seconds = build_seconds;
+  meta.refitted = refitted;
+  meta.root = image.root;
+  meta.bvh_nodes = triangle_stats.nodes;
+  meta.bvh_leaves = triangle_stats.leaves;
+  meta.bvh_depth = triangle_stats.depth;
+  meta.bvh_bytes = triangle_stats.bytes;
+  meta.bvh_sah_cost = triangle_stats.sah_cost;
+  meta.bvh_mean_leaf_size = triangle_stats.mean_leaf_size;
+  const simd::WideStats& w = image.stats;
+  meta.wide_nodes = w.nodes, meta.wide_leaves = w.leaves, meta.wide_depth = w.depth;
+  meta.wide_blocks = w.blocks, meta.wide_triangles = w.triangles, meta.wide_bytes = w.bytes;
+  meta.wide_mean_children = w.mean_children, meta.wide_sah_cost = w.sah_cost;
+  meta.wide_block_sah_cost = w.block_sah_cost;
+
+  std::vector<file::GeometryRecord> records;
+  std::vector<std::uint32_t> polygon_sizes;
+  std::vector<float> polygon_vertices;
+  for (const Geometry& g : geometries) {
+    records.push_back({g.first, g.count, g.index, g.vertex_count, g.polygon, g.enabled, g.moved, 0});
+    if (!g.polygon) continue;
+    const std::vector<glm::vec3>& v = polygons[g.index].vertices;
+    polygon_sizes.push_back(static_cast<std::uint32_t>(v.size()));
+    for (const glm::vec3& p : v) polygon_vertices.insert(polygon_vertices.end(), {p.x, p.y, p.z});
+  }
+
+  // The triangle input: each geometry's vertex array (rebuilt from its triangles: a vertex
+  // no triangle uses is 0) and its indices.
+  std::vector<float> vertices;
+  std::vector<std::uint32_t> indices;
+  std::span<const float> vertices_out;
+  std::span<const std::uint32_t> indices_out;
+  std::span<const unsigned char> excluded_out(excluded), excluded_flat_out(excluded_flat);
+  if (packed) {
+    vertices_out = packed->vertices, indices_out = packed->indices;
+    excluded_out = packed->excluded, excluded_flat_out = packed->excluded_flat;
+  } else {
+    for (const Geometry& g : geometries) {
+      if (g.polygon) continue;
+      const std::size_t base = vertices.size();
+      vertices.resize(base + 3 * g.vertex_count, 0.0f);
+      for (std::size_t k = 0; k < g.indices.size(); ++k)
+        std::memcpy(&vertices[base + 3 * std::size_t{g.indices[k]}], &triangles[3 * g.index + k], 3 * sizeof(float));
+      indices.insert(indices.end(), g.indices.begin(), g.indices.end());
+    }
+    vertices_out = vertices, indices_out = indices;
+  }
+
+  file::Header header{};
+  header.test = static_cast<std::uint32_t>(test);
+  header.isa = static_cast<std::uint32_t>(isa);
+  header.robust = robust;
+  header.reference_double = reference_double;
+  header.node_bytes = wide ? sizeof(simd::WideNode<simd::kWideN>) : 0;
+  header.block_bytes = wide ? static_cast<std::uint32_t>(image.block_bytes) : 0;
+
+  file::Writer out(path);
+  out.chunk(file::Tag::meta, &meta, sizeof meta);
+  out.chunk(file::Tag::geometries, std::span<const file::GeometryRecord>(records));
+  out.chunk(file::Tag::vertices, vertices_out);
+  out.chunk(file::Tag::indices, indices_out);
+  out.chunk(file::Tag::polygon_sizes, std::span<const std::uint32_t>(polygon_sizes));
+  out.chunk(file::Tag::polygon_vertices, std::span<const float>(polygon_vertices));
+  out.chunk(file::Tag::excluded, excluded_out);
+  out.chunk(file::Tag::excluded_flat, excluded_flat_out);
+  out.chunk(file::Tag::nodes, image.nodes, image.node_count * header.node_bytes);
+  out.chunk(file::Tag::blocks, image.blocks, image.block_count * header.block_bytes);
+  out.finish(header);
+}
+
+void Accel::Impl::unpack() {
+  if (!packed) return;
+  const Packed p = *packed;
+  const std::size_t n = loaded_triangles;
+  triangles.resize(3 * n);
+  triangle_ids.resize(n);
+  const float* v = p.vertices.data();
+  const std::uint32_t* idx = p.indices.data();
+  for (Geometry& g : geometries) {
+    if (g.polygon) continue;
+    g.indices.assign(idx, idx + 3 * std::size_t{g.count});
+    for (std::size_t k = 0; k < g.indices.size(); ++k) {
+      const float* x = v + 3 * std::size_t{g.indices[k]};
+      triangles[3 * g.index + k] = {x[0], x[1], x[2]};
+    }
+    for (std::uint32_t t = 0; t < g.count; ++t) triangle_ids[g.index + t] = g.first + t;
+    idx += 3 * std::size_t{g.count};
+    v += 3 * g.vertex_count;
+  }
+  excluded.assign(p.excluded.begin(), p.excluded.end());
+  excluded_flat.assign(p.excluded_flat.begin(), p.excluded_flat.end());
+  packed.reset();
+}
+
+}  // namespace volley
