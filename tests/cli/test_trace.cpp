@@ -290,3 +290,37 @@ TEST_CASE("trace and rays: bad input gives a clear message and a non-zero exit")
   CHECK(r.status != 0);
   CHECK(has(r.output, "no light"));
 }
+
+TEST_CASE("trace --save / --load: the loaded structure gives the same hit file; a wrong file is named") {
+  const fs::path rays = temp_path("saveload.vray"), saved = temp_path("cornell.vacc");
+  const fs::path built_hits = temp_path("built.vhit"), loaded_hits = temp_path("loaded.vhit");
+  REQUIRE(run("rays " + kCornell + " --workload primary --width 40 --height 30 -o " + rays.string()).status == 0);
+  Run r = run("trace " + kCornell + " --rays " + rays.string() + " --reps 1 --save " + saved.string() + " -o " +
+              built_hits.string());
+  REQUIRE(r.status == 0);
+  CHECK(has(r.output, "saved the structure to " + saved.string()));
+  CHECK(has(r.output, "BVH built in"));
+  r = run("trace " + kCornell + " --rays " + rays.string() + " --reps 1 --load " + saved.string() + " -o " +
+          loaded_hits.string());
+  REQUIRE(r.status == 0);
+  CHECK(has(r.output, "BVH loaded in"));
+  CHECK(bytes_of(built_hits) == bytes_of(loaded_hits));
+
+  // Saved from another scene: the counts differ, and the message says so.
+  r = run("trace " + std::string(VOLLEY_SOURCE_DIR) + "/scenes/polygons.json --rays " + rays.string() + " --load " +
+          saved.string());
+  CHECK(r.status != 0);
+  CHECK(r.status < 128);
+  CHECK(has(r.output, "it was saved from another scene"));
+  // Not a structure file, and a corrupted one.
+  r = run("trace " + kCornell + " --rays " + rays.string() + " --load " + rays.string());
+  CHECK(r.status != 0);
+  CHECK(has(r.output, "not a volley structure file"));
+  std::string bytes = bytes_of(saved);
+  bytes[bytes.size() / 2] ^= 1;
+  const fs::path corrupted = temp_file("corrupted.vacc", bytes);
+  r = run("trace " + kCornell + " --rays " + rays.string() + " --load " + corrupted.string());
+  CHECK(r.status != 0);
+  CHECK(has(r.output, "corrupted.vacc: checksum mismatch"));
+  CHECK(run("trace " + kCornell + " --rays " + rays.string() + " --load /nonexistent/x.vacc").status != 0);
+}
