@@ -415,6 +415,37 @@ std::vector<volley_hit> trace_all_forms(const volley_scene* scene, const std::ve
   return single;
 }
 
+/// Every geometry given one fuzzed mask and the scene committed again: a ray with a mask
+/// that shares a bit with it gets the unmasked answer `got`, one that shares none a miss,
+/// in the single, stream and packet forms.
+void check_masks(volley_scene* scene, const volley_commit_options& options, std::size_t geometries,
+                 const std::vector<volley_ray>& rays, const std::vector<volley_hit>& got, FuzzedDataProvider& in) {
+  const std::uint32_t geometry_mask = in.ConsumeIntegral<std::uint32_t>();
+  const std::uint32_t ray_mask = in.ConsumeBool() ? geometry_mask & in.ConsumeIntegral<std::uint32_t>()
+                                                  : in.ConsumeIntegral<std::uint32_t>();
+  for (std::uint32_t g = 0; g < geometries; ++g)
+    if (volley_scene_set_geometry_mask(scene, g, geometry_mask) != VOLLEY_OK) finding("set_geometry_mask failed", g);
+  if (volley_scene_commit_ex(scene, &options) != VOLLEY_OK) finding("commit after masking failed", 0);
+  const bool sees = (geometry_mask & ray_mask) != 0;
+  std::vector<std::uint32_t> masks(rays.size(), ray_mask);
+  std::vector<volley_hit> stream(rays.size());
+  if (volley_intersect_stream_masked(scene, rays.data(), masks.data(), rays.size(), stream.data()) != VOLLEY_OK)
+    finding("masked stream failed", 0);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    volley_hit h;
+    if (volley_intersect1_masked(scene, &rays[i], ray_mask, &h) != VOLLEY_OK) finding("intersect1_masked failed", i);
+    if (!sees) {
+      if (h.prim != VOLLEY_INVALID_PRIM || stream[i].prim != VOLLEY_INVALID_PRIM) finding("a masked-out geometry was hit", i);
+      continue;
+    }
+    // The same single-ray walk of the same tree: the same answer, bit for bit.
+    if (std::memcmp(&h, &got[i], sizeof h) != 0) finding("a masked ray disagrees with the unmasked one", i);
+    // The stream as trace_all_forms compares it (where the walks promise to agree).
+    if (!comparable(rays[i]) || !plausible(rays[i], h) || !plausible(rays[i], stream[i])) continue;
+    if (!agree(stream[i], h, true)) finding("the masked stream disagrees with intersect1_masked", i);
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -458,6 +489,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
     check_against_oracle(rays, got, geometry, first_triangle, first_triangle != VOLLEY_INVALID_PRIM, options.test,
                          info.isa, options.reference_double != 0);
+    check_masks(scene, options, info.geometries, rays, got, in);
   }
   volley_scene_destroy(scene);
   current = Case{};

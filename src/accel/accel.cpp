@@ -80,6 +80,13 @@ void Accel::enable_geometry(std::uint32_t geometry) {
   impl_->committed = false;
 }
 
+void Accel::set_geometry_mask(std::uint32_t geometry, std::uint32_t mask) {
+  Impl::Geometry& g = impl_->geometry_at("set_geometry_mask", geometry);
+  impl_->topology_changed |= g.mask != mask;
+  g.mask = mask;
+  impl_->committed = false;
+}
+
 void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_t vertex_count) {
   Impl::Geometry& g = impl_->geometry_at("update_vertices", geometry);
   if (g.polygon) throw Error("update_vertices: geometry " + std::to_string(geometry) + " is a polygon, not triangles");
@@ -127,7 +134,7 @@ void Accel::commit(const Options& options) {
     impl_->unpack();
     if (!impl_->refit(resolved)) impl_->build();
   } catch (const std::bad_alloc&) {
-    throw OutOfMemory("commit: out of memory building the structure of " + std::to_string(impl_->triangle_ids.size()) +
+    throw OutOfMemory("commit: out of memory building the structure of " + std::to_string(impl_->triangle_count()) +
                       " triangles and " + std::to_string(impl_->polygons.size()) +
                       " polygons; the Accel stays uncommitted (free memory, then commit again)");
   }
@@ -144,35 +151,71 @@ Hit Accel::intersect(const Ray& ray) const {
     impl_->attribute(hit.prim, hit.geom);
     return hit;
   }
-  return impl_->intersect(ray);
+  return impl_->intersect(ray, kMaskAll);
 }
 
 bool Accel::occluded(const Ray& ray) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
   if (const accel::WideAccel* w = impl_->wide_only) return w->occluded(ray);
-  return impl_->occluded(ray);
+  return impl_->occluded(ray, kMaskAll);
+}
+
+Hit Accel::intersect(const Ray& ray, std::uint32_t mask) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  return impl_->intersect(ray, mask);
+}
+
+bool Accel::occluded(const Ray& ray, std::uint32_t mask) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  return impl_->occluded(ray, mask);
 }
 
 template <int K>
 void Accel::intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
-  impl_->intersect(rays, hits);
+  impl_->intersect(rays, hits, nullptr);
 }
 
 template <int K>
 std::uint32_t Accel::occluded(const RayPacket<K>& rays) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
-  return impl_->occluded(rays);
+  return impl_->occluded(rays, nullptr);
+}
+
+template <int K>
+void Accel::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  if (!masks) throw Error("intersect: masks is null (pass K ray masks, or use the call without masks)");
+  impl_->intersect(rays, hits, masks);
+}
+
+template <int K>
+std::uint32_t Accel::occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  if (!masks) throw Error("occluded: masks is null (pass K ray masks, or use the call without masks)");
+  return impl_->occluded(rays, masks);
 }
 
 void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
-  impl_->intersect(rays, count, hits);
+  impl_->intersect(rays, nullptr, count, hits);
 }
 
 void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
-  impl_->occluded(rays, count, blocked);
+  impl_->occluded(rays, nullptr, count, blocked);
+}
+
+void Accel::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  if (!masks && count != 0) throw Error("intersect: masks is null (pass one mask per ray, or use the call without masks)");
+  impl_->intersect(rays, masks, count, hits);
+}
+
+void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  if (!masks && count != 0) throw Error("occluded: masks is null (pass one mask per ray, or use the call without masks)");
+  impl_->occluded(rays, masks, count, blocked);
 }
 
 // The packet widths of the API.
@@ -182,6 +225,12 @@ template void Accel::intersect<16>(const RayPacket<16>&, HitPacket<16>&) const;
 template std::uint32_t Accel::occluded<4>(const RayPacket<4>&) const;
 template std::uint32_t Accel::occluded<8>(const RayPacket<8>&) const;
 template std::uint32_t Accel::occluded<16>(const RayPacket<16>&) const;
+template void Accel::intersect<4>(const RayPacket<4>&, HitPacket<4>&, const std::uint32_t*) const;
+template void Accel::intersect<8>(const RayPacket<8>&, HitPacket<8>&, const std::uint32_t*) const;
+template void Accel::intersect<16>(const RayPacket<16>&, HitPacket<16>&, const std::uint32_t*) const;
+template std::uint32_t Accel::occluded<4>(const RayPacket<4>&, const std::uint32_t*) const;
+template std::uint32_t Accel::occluded<8>(const RayPacket<8>&, const std::uint32_t*) const;
+template std::uint32_t Accel::occluded<16>(const RayPacket<16>&, const std::uint32_t*) const;
 
 AccelInfo Accel::info() const { return impl_->info(); }
 

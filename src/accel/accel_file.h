@@ -22,17 +22,18 @@ inline constexpr char kMagic[8] = {'V', 'O', 'L', 'L', 'E', 'Y', 'A', 'C'};
 /// Written as is: read back in another byte order it is 0x04030201.
 inline constexpr std::uint32_t kByteOrder = 0x01020304u;
 
-/// The chunks, in the order they are written.
+/// The chunks, in the order they are written: the scene's, then per layer (one per
+/// geometry mask) a layer record, its nodes and its blocks.
 enum class Tag : std::uint32_t {
-  meta = 1,          ///< Meta (accel_save.cpp)
-  geometries,        ///< one record per geometry
+  meta = 1,          ///< Meta
+  geometries,        ///< one GeometryRecord per geometry
   vertices,          ///< the triangle geometries' vertices, 3 floats each, geometry after geometry
   indices,           ///< their vertex indices, 3 per triangle
   polygon_sizes,     ///< vertices per polygon geometry
   polygon_vertices,  ///< their vertices, 3 floats each
-  excluded,          ///< one byte per triangle: left out of the BVH at the last build
-  excluded_flat,     ///< one byte per triangle: left out as degenerate
-  nodes,             ///< the wide BVH's nodes (none for a scalar commit)
+  excluded_flat,     ///< one byte per triangle: left out of the BVHs as degenerate
+  layer,             ///< LayerRecord
+  nodes,             ///< the layer's wide BVH nodes (none for a scalar commit)
   blocks,            ///< its triangle blocks
 };
 
@@ -56,22 +57,29 @@ inline constexpr std::size_t kStripe = 64;
 /// The meta chunk: the committed state beside the structure.
 struct Meta {
   std::uint64_t geometries, triangles, polygons, next_id;
-  std::uint64_t degenerate, disabled;
-  double built_sah, sah_now, build_seconds;
-  std::uint32_t refitted, root;             ///< root: the wide BVH's root reference
-  std::uint64_t bvh_nodes, bvh_leaves, bvh_depth, bvh_bytes;  ///< the binary BVH's statistics
-  double bvh_sah_cost, bvh_mean_leaf_size;
-  std::uint64_t wide_nodes, wide_leaves, wide_depth, wide_blocks, wide_triangles, wide_bytes;
-  double wide_mean_children, wide_sah_cost, wide_block_sah_cost;
+  std::uint64_t degenerate, disabled, layers;
+  double build_seconds;
+  std::uint32_t refitted, zero;
 };
 
 /// One geometry (Accel::Impl::Geometry without its indices, which are in the indices chunk).
 struct GeometryRecord {
   std::uint32_t first, count;
   std::uint64_t index, vertex_count;
-  std::uint32_t polygon, enabled, moved, zero;
+  std::uint32_t polygon, enabled, moved, mask;
 };
 static_assert(sizeof(GeometryRecord) == 40);
+
+/// One layer (Accel::Impl::Layer): its mask, the wide root and the statistics info() reports.
+struct LayerRecord {
+  std::uint32_t mask, root;
+  std::uint32_t has_triangles, zero;
+  double built_sah, sah_now;
+  std::uint64_t bvh_nodes, bvh_leaves, bvh_depth, bvh_bytes;  ///< the binary BVH's statistics
+  double bvh_sah_cost, bvh_mean_leaf_size;
+  std::uint64_t wide_nodes, wide_leaves, wide_depth, wide_blocks, wide_triangles, wide_bytes;
+  double wide_mean_children, wide_sah_cost, wide_block_sah_cost;
+};
 
 /// The running checksum of whole 64-byte stripes: eight lanes of 64-bit words, each with
 /// its sum and its sum of sums (Fletcher's two orders: a changed, swapped or moved word

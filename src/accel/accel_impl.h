@@ -1,6 +1,8 @@
-// Accel's private state: the geometry as added, and at commit one triangle engine (the
-// wide SIMD BVH, the scalar oracle or the double reference: engine.h) and one polygon
-// engine, each only when the scene has that kind, combined once: triangles, then polygons.
+// Accel's private state: the geometry as added, and at commit its layers: one per distinct
+// geometry mask (Accel::set_geometry_mask; a scene that sets none has one), each with one
+// triangle engine (the wide SIMD BVH, the scalar oracle or the double reference: engine.h)
+// and one polygon engine, each only when the layer has that kind. A ray walks the layers
+// whose mask shares a bit with its own: triangles, then polygons bounded by their hit.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -34,6 +36,20 @@ struct Accel::Impl {
     std::vector<std::uint32_t> indices;  ///< triangles: the vertex indices as added (update_vertices)
     std::size_t vertex_count = 0;        ///< triangles: the vertices the add call gave
     bool moved = false;                  ///< update_vertices was called on it (a deforming mesh)
+    std::uint32_t mask = kMaskAll;       ///< set_geometry_mask
+  };
+
+  /// The engines over the enabled geometries of one mask.
+  struct Layer {
+    std::uint32_t mask = kMaskAll;
+    std::unique_ptr<accel::TriangleEngine> triangle_engine;
+    std::unique_ptr<accel::Engine> polygon_engine;
+    std::vector<core::Polygon> polygons;  ///< what polygon_engine holds
+    std::vector<std::uint32_t> polygon_ids;
+    std::vector<unsigned char> excluded;  ///< per triangle: not in this layer's BVH (another layer's, disabled, degenerate)
+    core::BvhStats triangle_stats;        ///< of the binary triangle BVH, as built (unit costs)
+    double built_sah = 0.0;               ///< triangle SAH cost at the last build
+    double sah_now = 0.0;                 ///< the same now (after refits)
   };
 
   // Input, in internal-id order of each kind.
@@ -52,37 +68,31 @@ struct Accel::Impl {
   bool reference_double = false;  ///< Options::reference_double (isa == scalar only)
   double build_seconds = 0.0;
   std::size_t degenerate = 0;
-  core::BvhStats triangle_stats;  ///< of the binary triangle BVH, as built (unit costs)
   std::size_t disabled = 0;       ///< geometries left out at the commit
   bool one_geometry = false;      ///< the committed scene has one geometry (hits need no search)
   // What decides between a refit and a build at the next commit (Options::refit).
-  bool topology_changed = true;   ///< a geometry added, enabled or disabled since the last build
+  bool topology_changed = true;   ///< a geometry added, enabled, disabled or masked since the last build
   bool vertices_changed = false;  ///< update_vertices since the last commit
   Options built_with;             ///< the options of the last build (isa resolved)
-  std::vector<unsigned char> excluded;       ///< per triangle: left out of the BVH at the last build
-  std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate
-  double built_sah = 0.0;         ///< triangle SAH cost at the last build
-  double sah_now = 0.0;           ///< the same now (after refits)
+  std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
   bool refitted = false;          ///< the last commit refitted
-  std::unique_ptr<accel::TriangleEngine> triangle_engine;
-  std::unique_ptr<accel::Engine> polygon_engine;
-  std::vector<core::Polygon> enabled_polygons;  ///< what polygon_engine holds (enabled geometries)
-  std::vector<std::uint32_t> enabled_polygon_ids;
+  std::vector<Layer> layers;      ///< by descending mask; none when nothing can be hit
   /// A loaded Accel's triangle input, still in the mapped file (Accel::load): unpack() copies
   /// it into the vectors above before anything reads them (a query does not).
   struct Packed {
     std::shared_ptr<const accel::file::Mapping> file;
     std::span<const float> vertices;  ///< the triangle geometries' vertices, geometry after geometry
     std::span<const std::uint32_t> indices;
-    std::span<const unsigned char> excluded, excluded_flat;
+    std::span<const unsigned char> excluded_flat;
   };
   std::optional<Packed> packed;
   std::size_t loaded_triangles = 0;  ///< the triangles while packed
   bool loaded = false;               ///< the structure came from a file (AccelInfo::loaded)
   double load_seconds = 0.0;
 
-  /// The wide BVH when it holds the whole scene (no polygons), else null: Accel's single-ray
-  /// queries and full packets call it directly (a layer of calls less).
+  /// The wide BVH when it holds the whole scene (one layer, no polygons), else null:
+  /// Accel's single-ray queries and full packets without a ray mask call it directly (a
+  /// layer of calls less).
   const accel::WideAccel* wide_only = nullptr;
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
@@ -110,24 +120,36 @@ struct Accel::Impl {
   /// Fills a fresh Impl from a saved file, committed (accel_load.cpp). Throws Error.
   void load_from(const std::string& path);
 
-  /// Builds every engine for the committed options (test, isa, robust, reference_double).
+  /// Builds every layer for the committed options (test, isa, robust, reference_double).
   void build();
-  /// Refits the triangle engine to moved vertices when that is allowed and pays (see
-  /// Options::refit); false (nothing built) when the caller must build instead.
-  bool refit(const Options& options);
-  /// Builds the polygon engine over the enabled polygon geometries (none: no engine).
-  void build_polygons();
+  /// The distinct masks of the enabled geometries, 0 left out, descending: the layers.
+  std::vector<std::uint32_t> layer_masks() const;
+  /// Sets layer.excluded: the triangles not in it (another mask, disabled, degenerate).
+  void exclude_others(Layer& layer) const;
+  /// Builds a layer's polygon engine over its enabled polygon geometries (none: no engine).
+  void build_polygons(Layer& layer);
   /// Sets wide_only, one_geometry and the refit state after a build or a load.
   void finish_build();
-  Hit intersect(const Ray& ray) const;
-  bool occluded(const Ray& ray) const;
+  /// Refits the triangle engines to moved vertices when that is allowed and pays (see
+  /// Options::refit); false (nothing built) when the caller must build instead.
+  bool refit(const Options& options);
+  /// SAH costs summed over the layers: at the last build and now.
+  double built_sah() const;
+  double sah_now() const;
+
+  // Queries (accel_query.cpp, stream.cpp): rays see the layers whose mask shares a bit with
+  // `mask` (kMaskAll for the queries without a mask); mask 0 sees nothing.
+  Hit intersect(const Ray& ray, std::uint32_t mask) const;
+  bool occluded(const Ray& ray, std::uint32_t mask) const;
+  /// Packets: masks[i] is lane i's mask; null = kMaskAll for every lane.
   template <int K>
-  void intersect(const RayPacket<K>& rays, HitPacket<K>& hits) const;
+  void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
   template <int K>
-  std::uint32_t occluded(const RayPacket<K>& rays) const;
-  /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays.
-  void intersect(const Ray* rays, std::size_t count, Hit* hits) const;
-  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const;
+  std::uint32_t occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const;
+  /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays. masks:
+  /// one per ray, or null.
+  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
+  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
   AccelInfo info() const;
 
  private:
@@ -135,12 +157,17 @@ struct Accel::Impl {
   /// chunk; `vertex_total` = the triangle geometries' vertices.
   void read_geometries(accel::file::Reader& in, const accel::file::Meta& meta,
                        std::span<const accel::file::GeometryRecord> records, std::uint64_t& vertex_total);
+  /// load(): one layer's record, excluded flags, nodes and blocks; its engines.
+  void read_layer(accel::file::Reader& in, std::uint32_t mask, const std::shared_ptr<const accel::file::Mapping>& mapping);
   /// Whether triangle i has no area (in double with reference_double).
   bool flat(std::size_t i) const;
   /// attribute() for a scene of several geometries: a binary search of the first ids.
   void attribute_search(std::uint32_t& prim, std::uint32_t& geom) const;
+  /// The lanes of `active` (of K) whose mask shares a bit with `mask`.
   template <int K>
-  void trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits) const;
+  static std::uint32_t lanes_of(std::uint32_t active, const std::uint32_t* masks, std::uint32_t mask);
+  template <int K>
+  void trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
 };
 
 }  // namespace volley

@@ -41,7 +41,7 @@ void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Me
     disabled += !r.enabled;
     id += r.count;
     out.push_back({r.first, r.count, static_cast<std::size_t>(r.index), r.polygon != 0, r.enabled != 0, {},
-                   static_cast<std::size_t>(r.vertex_count), r.moved != 0});
+                   static_cast<std::size_t>(r.vertex_count), r.moved != 0, r.mask});
   }
   if (triangles != meta.triangles || polygons != meta.polygons || id != meta.next_id || disabled != meta.disabled ||
       meta.degenerate > meta.triangles)
@@ -96,40 +96,13 @@ void Accel::Impl::load_from(const std::string& path) {
   });
   const auto polygon_sizes = in.next<std::uint32_t>(file::Tag::polygon_sizes);
   const auto polygon_vertices = in.next<float>(file::Tag::polygon_vertices);
-  const auto excluded_in = in.next<unsigned char>(file::Tag::excluded);
   const auto excluded_flat_in = in.next<unsigned char>(file::Tag::excluded_flat);
   if (vertices.size() != 3 * vertex_total || indices.size() != 3 * meta.triangles ||
-      polygon_sizes.size() != meta.polygons || excluded_in.size() != meta.triangles ||
-      excluded_flat_in.size() != meta.triangles)
+      polygon_sizes.size() != meta.polygons || excluded_flat_in.size() != meta.triangles)
     in.fail("the input chunks' sizes do not match the geometry table");
   for (const Geometry& g : geometries)
     if (g.polygon) polygon_ids.push_back(g.first);
-
-  // The wide BVH: its blocks' triangle ids checked while they are read, its tree after.
-  std::unique_ptr<accel::WideAccel> wide;
-  if (isa != Isa::scalar) {
-    wide = accel::WideAccel::create(test, isa, robust);
-    if (meta.triangles != 0 &&
-        (h.node_bytes != sizeof(simd::WideNode<simd::kWideN>) || h.block_bytes != wide->block_bytes()))
-      in.fail("the wide BVH's node or block size does not match this build of volley");
-  }
-  const auto nodes = in.next<unsigned char>(file::Tag::nodes);
-  const std::size_t block_bytes = wide ? wide->block_bytes() : 1;
-  std::size_t blocks_seen = 0;
-  const accel::ImageIds ids{static_cast<std::uint32_t>(meta.next_id), &polygon_ids};
-  const auto blocks = in.next_items(file::Tag::blocks, block_bytes, [&](std::span<const unsigned char> slab) {
-    const std::size_t count = slab.size() / block_bytes;
-    try {
-      accel::check_block_ids(slab.data(), count, blocks_seen, *wide, ids);
-    } catch (const std::invalid_argument& e) {
-      in.fail(e.what());
-    }
-    blocks_seen += count;
-  });
-  in.finish();
-  if (wide && meta.triangles == 0 && (!nodes.empty() || !blocks.empty())) in.fail("wide nodes without triangles");
-  if (!wide && (!nodes.empty() || !blocks.empty())) in.fail("a scalar structure with wide nodes");
-  if (nodes.size() % sizeof(simd::WideNode<simd::kWideN>) != 0) in.fail("the nodes chunk holds part of a node");
+  next_id = static_cast<std::uint32_t>(meta.next_id);
 
   // Polygons: few, rebuilt from their outlines (make_polygon checks each again).
   std::size_t at = 0;
@@ -148,44 +121,85 @@ void Accel::Impl::load_from(const std::string& path) {
   }
   if (at != polygon_vertices.size()) in.fail("the polygon outlines do not fill their chunk");
 
-  next_id = static_cast<std::uint32_t>(meta.next_id);
+  // The layers: the masks of the geometry table, in the order a build makes them.
+  const std::vector<std::uint32_t> masks = layer_masks();
+  if (meta.layers != masks.size()) in.fail("the layer count does not match the geometries' masks");
+  for (const std::uint32_t mask : masks) read_layer(in, mask, mapping);
+  in.finish();
+
   degenerate = meta.degenerate;
   disabled = meta.disabled;
-  packed = Packed{mapping, vertices, indices, excluded_in, excluded_flat_in};
+  packed = Packed{mapping, vertices, indices, excluded_flat_in};
   loaded_triangles = meta.triangles;
-  if (!wide) {
+  if (isa == Isa::scalar) {
     // The oracle's structures are for checking, not speed: rebuilt from the input.
     unpack();
     build();
   } else {
-    if (meta.triangles != 0) {
-      accel::WideImage image;
-      image.nodes = nodes.data(), image.node_count = nodes.size() / sizeof(simd::WideNode<simd::kWideN>);
-      image.blocks = blocks.data(), image.block_count = blocks.size() / block_bytes;
-      image.block_bytes = block_bytes;
-      image.root = meta.root;
-      image.stats = {meta.wide_nodes,     meta.wide_leaves,        meta.wide_depth,    meta.wide_blocks,
-                     meta.wide_triangles, meta.wide_mean_children, meta.wide_sah_cost, meta.wide_block_sah_cost,
-                     meta.wide_bytes};
-      image.owner = mapping;
-      try {
-        wide->adopt(std::move(image));
-      } catch (const std::invalid_argument& e) {
-        in.fail(e.what());
-      }
-      triangle_engine = accel::make_wide_engine(std::move(wide));
-      triangle_stats = {meta.bvh_nodes, meta.bvh_leaves, meta.bvh_depth, meta.bvh_sah_cost, meta.bvh_mean_leaf_size,
-                        meta.bvh_bytes};
-    }
-    build_polygons();
+    for (Layer& l : layers) build_polygons(l);
     finish_build();
   }
-  built_sah = meta.built_sah;
-  sah_now = meta.sah_now;
   refitted = meta.refitted != 0;
   build_seconds = meta.build_seconds;
   loaded = true;
   committed = true;
+}
+
+void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
+                             const std::shared_ptr<const accel::file::Mapping>& mapping) {
+  namespace file = accel::file;
+  const file::Header& h = in.header();
+  const file::LayerRecord& r = in.one<file::LayerRecord>(file::Tag::layer);
+  const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
+    return g.enabled && !g.polygon && g.mask == mask;
+  });
+  if (r.mask != mask || r.has_triangles != (has_triangles ? 1u : 0u))
+    in.fail("a layer record does not match the geometries' masks");
+  // The wide BVH: its blocks' triangle ids checked while they are read, its tree after.
+  std::unique_ptr<accel::WideAccel> wide;
+  if (isa != Isa::scalar && has_triangles) {
+    wide = accel::WideAccel::create(test, isa, robust);
+    if (h.node_bytes != sizeof(simd::WideNode<simd::kWideN>) || h.block_bytes != wide->block_bytes())
+      in.fail("the wide BVH's node or block size does not match this build of volley");
+  }
+  const auto nodes = in.next<unsigned char>(file::Tag::nodes);
+  const std::size_t block_bytes = wide ? wide->block_bytes() : 1;
+  std::size_t blocks_seen = 0;
+  const accel::ImageIds ids{next_id, &polygon_ids};
+  const auto blocks = in.next_items(file::Tag::blocks, block_bytes, [&](std::span<const unsigned char> slab) {
+    if (!wide) in.fail("triangle blocks in a layer that has none");
+    const std::size_t count = slab.size() / block_bytes;
+    try {
+      accel::check_block_ids(slab.data(), count, blocks_seen, *wide, ids);
+    } catch (const std::invalid_argument& e) {
+      in.fail(e.what());
+    }
+    blocks_seen += count;
+  });
+  if (!wide && (!nodes.empty() || !blocks.empty())) in.fail("wide nodes in a layer that has none");
+  if (nodes.size() % sizeof(simd::WideNode<simd::kWideN>) != 0) in.fail("the nodes chunk holds part of a node");
+  if (isa == Isa::scalar) return;  // rebuilt
+
+  Layer& layer = layers.emplace_back();
+  layer.mask = mask;
+  layer.built_sah = r.built_sah;
+  layer.sah_now = r.sah_now;
+  if (!wide) return;
+  accel::WideImage image;
+  image.nodes = nodes.data(), image.node_count = nodes.size() / sizeof(simd::WideNode<simd::kWideN>);
+  image.blocks = blocks.data(), image.block_count = blocks.size() / block_bytes;
+  image.block_bytes = block_bytes;
+  image.root = r.root;
+  image.stats = {r.wide_nodes,     r.wide_leaves,        r.wide_depth,    r.wide_blocks,        r.wide_triangles,
+                 r.wide_mean_children, r.wide_sah_cost, r.wide_block_sah_cost, r.wide_bytes};
+  image.owner = mapping;
+  try {
+    wide->adopt(std::move(image));
+  } catch (const std::invalid_argument& e) {
+    in.fail(e.what());
+  }
+  layer.triangle_engine = accel::make_wide_engine(std::move(wide));
+  layer.triangle_stats = {r.bvh_nodes, r.bvh_leaves, r.bvh_depth, r.bvh_sah_cost, r.bvh_mean_leaf_size, r.bvh_bytes};
 }
 
 }  // namespace volley

@@ -11,9 +11,6 @@ namespace volley {
 
 void Accel::Impl::save_to(const std::string& path) const {
   namespace file = accel::file;
-  const accel::WideAccel* wide = triangle_engine ? triangle_engine->wide() : nullptr;
-  const accel::WideImage image = wide ? wide->image() : accel::WideImage{};
-
   file::Meta meta{};
   meta.geometries = geometries.size();
   meta.triangles = triangle_count();
@@ -21,28 +18,15 @@ void Accel::Impl::save_to(const std::string& path) const {
   meta.next_id = next_id;
   meta.degenerate = degenerate;
   meta.disabled = disabled;
-  meta.built_sah = built_sah;
-  meta.sah_now = sah_now;
+  meta.layers = layers.size();
   meta.build_seconds = build_seconds;
   meta.refitted = refitted;
-  meta.root = image.root;
-  meta.bvh_nodes = triangle_stats.nodes;
-  meta.bvh_leaves = triangle_stats.leaves;
-  meta.bvh_depth = triangle_stats.depth;
-  meta.bvh_bytes = triangle_stats.bytes;
-  meta.bvh_sah_cost = triangle_stats.sah_cost;
-  meta.bvh_mean_leaf_size = triangle_stats.mean_leaf_size;
-  const simd::WideStats& w = image.stats;
-  meta.wide_nodes = w.nodes, meta.wide_leaves = w.leaves, meta.wide_depth = w.depth;
-  meta.wide_blocks = w.blocks, meta.wide_triangles = w.triangles, meta.wide_bytes = w.bytes;
-  meta.wide_mean_children = w.mean_children, meta.wide_sah_cost = w.sah_cost;
-  meta.wide_block_sah_cost = w.block_sah_cost;
 
   std::vector<file::GeometryRecord> records;
   std::vector<std::uint32_t> polygon_sizes;
   std::vector<float> polygon_vertices;
   for (const Geometry& g : geometries) {
-    records.push_back({g.first, g.count, g.index, g.vertex_count, g.polygon, g.enabled, g.moved, 0});
+    records.push_back({g.first, g.count, g.index, g.vertex_count, g.polygon, g.enabled, g.moved, g.mask});
     if (!g.polygon) continue;
     const std::vector<glm::vec3>& v = polygons[g.index].vertices;
     polygon_sizes.push_back(static_cast<std::uint32_t>(v.size()));
@@ -55,10 +39,9 @@ void Accel::Impl::save_to(const std::string& path) const {
   std::vector<std::uint32_t> indices;
   std::span<const float> vertices_out;
   std::span<const std::uint32_t> indices_out;
-  std::span<const unsigned char> excluded_out(excluded), excluded_flat_out(excluded_flat);
+  std::span<const unsigned char> excluded_flat_out(excluded_flat);
   if (packed) {
-    vertices_out = packed->vertices, indices_out = packed->indices;
-    excluded_out = packed->excluded, excluded_flat_out = packed->excluded_flat;
+    vertices_out = packed->vertices, indices_out = packed->indices, excluded_flat_out = packed->excluded_flat;
   } else {
     for (const Geometry& g : geometries) {
       if (g.polygon) continue;
@@ -76,8 +59,8 @@ void Accel::Impl::save_to(const std::string& path) const {
   header.isa = static_cast<std::uint32_t>(isa);
   header.robust = robust;
   header.reference_double = reference_double;
-  header.node_bytes = wide ? sizeof(simd::WideNode<simd::kWideN>) : 0;
-  header.block_bytes = wide ? static_cast<std::uint32_t>(image.block_bytes) : 0;
+  header.node_bytes = isa != Isa::scalar ? sizeof(simd::WideNode<simd::kWideN>) : 0;
+  header.block_bytes = 0;
 
   file::Writer out(path);
   out.chunk(file::Tag::meta, &meta, sizeof meta);
@@ -86,10 +69,28 @@ void Accel::Impl::save_to(const std::string& path) const {
   out.chunk(file::Tag::indices, indices_out);
   out.chunk(file::Tag::polygon_sizes, std::span<const std::uint32_t>(polygon_sizes));
   out.chunk(file::Tag::polygon_vertices, std::span<const float>(polygon_vertices));
-  out.chunk(file::Tag::excluded, excluded_out);
   out.chunk(file::Tag::excluded_flat, excluded_flat_out);
-  out.chunk(file::Tag::nodes, image.nodes, image.node_count * header.node_bytes);
-  out.chunk(file::Tag::blocks, image.blocks, image.block_count * header.block_bytes);
+  for (const Layer& l : layers) {
+    const accel::WideAccel* wide = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
+    const accel::WideImage image = wide ? wide->image() : accel::WideImage{};
+    if (wide) header.block_bytes = static_cast<std::uint32_t>(image.block_bytes);
+    file::LayerRecord r{};
+    r.mask = l.mask;
+    r.root = image.root;
+    r.has_triangles = l.triangle_engine != nullptr;
+    r.built_sah = l.built_sah;
+    r.sah_now = l.sah_now;
+    r.bvh_nodes = l.triangle_stats.nodes, r.bvh_leaves = l.triangle_stats.leaves;
+    r.bvh_depth = l.triangle_stats.depth, r.bvh_bytes = l.triangle_stats.bytes;
+    r.bvh_sah_cost = l.triangle_stats.sah_cost, r.bvh_mean_leaf_size = l.triangle_stats.mean_leaf_size;
+    const simd::WideStats& w = image.stats;
+    r.wide_nodes = w.nodes, r.wide_leaves = w.leaves, r.wide_depth = w.depth;
+    r.wide_blocks = w.blocks, r.wide_triangles = w.triangles, r.wide_bytes = w.bytes;
+    r.wide_mean_children = w.mean_children, r.wide_sah_cost = w.sah_cost, r.wide_block_sah_cost = w.block_sah_cost;
+    out.chunk(file::Tag::layer, &r, sizeof r);
+    out.chunk(file::Tag::nodes, image.nodes, image.node_count * sizeof(simd::WideNode<simd::kWideN>));
+    out.chunk(file::Tag::blocks, image.blocks, image.block_count * image.block_bytes);
+  }
   out.finish(header);
 }
 
@@ -112,9 +113,10 @@ void Accel::Impl::unpack() {
     idx += 3 * std::size_t{g.count};
     v += 3 * g.vertex_count;
   }
-  excluded.assign(p.excluded.begin(), p.excluded.end());
   excluded_flat.assign(p.excluded_flat.begin(), p.excluded_flat.end());
   packed.reset();
+  for (Layer& l : layers)
+    if (l.triangle_engine) exclude_others(l);
 }
 
 }  // namespace volley

@@ -21,40 +21,46 @@ bool same_octant(const Ray* rays, std::size_t n) {
   return all == any;
 }
 
-/// Whether rays[0 .. n) go as one packet: 16 of them, an engine that traces packets, and
+/// Whether rays[0 .. n) go as one packet: 16 of them, engines that trace packets, and
 /// AVX-512 (packets of any octants pay there) or one octant.
-bool as_packet(const accel::TriangleEngine* engine, Isa isa, const Ray* rays, std::size_t n) {
-  return engine && engine->traces_packets() && n == 16 && (isa == Isa::avx512 || same_octant(rays, n));
+template <class Impl>
+bool as_packet(const Impl& impl, const Ray* rays, std::size_t n) {
+  if (n != 16 || impl.layers.empty()) return false;
+  for (const auto& l : impl.layers)
+    if (!l.triangle_engine || !l.triangle_engine->traces_packets()) return false;
+  return impl.isa == Isa::avx512 || same_octant(rays, n);
 }
 
 }  // namespace
 
-void Accel::Impl::intersect(const Ray* rays, std::size_t count, Hit* hits) const {
+void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
+    const std::uint32_t* m = masks ? masks + first : nullptr;
+    if (as_packet(*this, rays + first, n)) {
       RayPacket<16> p;
       volley::load(p, rays + first, 16);
       HitPacket<16> h;
       reset(h);
-      intersect(p, h);
+      intersect(p, h, m);
       store(h, hits + first, 16);
     } else {
-      for (std::size_t i = first; i < first + n; ++i) hits[i] = intersect(rays[i]);
+      for (std::size_t i = 0; i < n; ++i) hits[first + i] = intersect(rays[first + i], m ? m[i] : kMaskAll);
     }
   }
 }
 
-void Accel::Impl::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const {
+void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(triangle_engine.get(), isa, rays + first, n)) {
+    const std::uint32_t* m = masks ? masks + first : nullptr;
+    if (as_packet(*this, rays + first, n)) {
       RayPacket<16> p;
       volley::load(p, rays + first, 16);
-      const std::uint32_t mask = occluded(p);
+      const std::uint32_t mask = occluded(p, m);
       for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
     } else {
-      for (std::size_t i = first; i < first + n; ++i) blocked[i] = occluded(rays[i]) ? 1 : 0;
+      for (std::size_t i = 0; i < n; ++i) blocked[first + i] = occluded(rays[first + i], m ? m[i] : kMaskAll) ? 1 : 0;
     }
   }
 }

@@ -126,29 +126,37 @@ auto with_zero_lanes_dropped(const RayPacket<K>& rays, Trace&& trace) {
   return trace(static_cast<const RayPacket<K>&>(copy));
 }
 
+/// A packet query; `masked`: the form with a mask per lane (masks must not be NULL).
 template <int K>
 volley_status intersect_packet(const char* function, const volley_scene* scene, const typename CTypes<K>::Rays* rays,
-                               typename CTypes<K>::Hits* hits) {
+                               typename CTypes<K>::Hits* hits, bool masked = false,
+                               const std::uint32_t* masks = nullptr) {
   return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
     require_committed(scene);
     require_pointer(rays, "rays");
+    if (masked) require_pointer(masks, "masks");
     require_pointer(hits, "hits");
     require_aligned(rays, "rays");
     require_aligned(hits, "hits");
     HitPacket<K>& out = as_cpp<K>(hits);
-    with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) { scene->accel.intersect(p, out); });
+    with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
+      masked ? scene->accel.intersect(p, out, masks) : scene->accel.intersect(p, out);
+    });
   });
 }
 
 template <int K>
 volley_status occluded_packet(const char* function, const volley_scene* scene, const typename CTypes<K>::Rays* rays,
-                              std::uint32_t* occluded) {
+                              std::uint32_t* occluded, bool masked = false, const std::uint32_t* masks = nullptr) {
   return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
     require_committed(scene);
     require_pointer(rays, "rays");
+    if (masked) require_pointer(masks, "masks");
     require_pointer(occluded, "occluded");
     require_aligned(rays, "rays");
-    *occluded = with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) { return scene->accel.occluded(p); });
+    *occluded = with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
+      return masked ? scene->accel.occluded(p, masks) : scene->accel.occluded(p);
+    });
   });
 }
 
@@ -250,6 +258,79 @@ volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray
     require_pointer(rays, "rays");
     require_pointer(occluded, "occluded");
     scene->accel.occluded(as_cpp(rays), count, occluded);
+  });
+}
+
+volley_status volley_intersect1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask,
+                                       volley_hit* hit) {
+  return guarded("volley_intersect1_masked", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    require_pointer(ray, "ray");
+    require_pointer(hit, "hit");
+    volley::Ray r;
+    std::memcpy(&r, ray, sizeof r);
+    const volley::Hit h = zero_direction(r.dir) ? volley::Hit{} : scene->accel.intersect(r, mask);
+    std::memcpy(hit, &h, sizeof h);
+  });
+}
+
+volley_status volley_occluded1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask, int* occluded) {
+  return guarded("volley_occluded1_masked", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    require_pointer(ray, "ray");
+    require_pointer(occluded, "occluded");
+    volley::Ray r;
+    std::memcpy(&r, ray, sizeof r);
+    *occluded = !zero_direction(r.dir) && scene->accel.occluded(r, mask) ? 1 : 0;
+  });
+}
+
+volley_status volley_intersect4_masked(const volley_scene* scene, const volley_ray_packet4* rays, const uint32_t* masks,
+                                       volley_hit_packet4* hits) {
+  return intersect_packet<4>("volley_intersect4_masked", scene, rays, hits, true, masks);
+}
+volley_status volley_intersect8_masked(const volley_scene* scene, const volley_ray_packet8* rays, const uint32_t* masks,
+                                       volley_hit_packet8* hits) {
+  return intersect_packet<8>("volley_intersect8_masked", scene, rays, hits, true, masks);
+}
+volley_status volley_intersect16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
+                                        const uint32_t* masks, volley_hit_packet16* hits) {
+  return intersect_packet<16>("volley_intersect16_masked", scene, rays, hits, true, masks);
+}
+volley_status volley_occluded4_masked(const volley_scene* scene, const volley_ray_packet4* rays, const uint32_t* masks,
+                                      uint32_t* occluded) {
+  return occluded_packet<4>("volley_occluded4_masked", scene, rays, occluded, true, masks);
+}
+volley_status volley_occluded8_masked(const volley_scene* scene, const volley_ray_packet8* rays, const uint32_t* masks,
+                                      uint32_t* occluded) {
+  return occluded_packet<8>("volley_occluded8_masked", scene, rays, occluded, true, masks);
+}
+volley_status volley_occluded16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
+                                       const uint32_t* masks, uint32_t* occluded) {
+  return occluded_packet<16>("volley_occluded16_masked", scene, rays, occluded, true, masks);
+}
+
+volley_status volley_intersect_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
+                                             size_t count, volley_hit* hits) {
+  return guarded("volley_intersect_stream_masked", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    if (count == 0) return;
+    require_pointer(rays, "rays");
+    require_pointer(masks, "masks");
+    require_pointer(hits, "hits");
+    scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits));
+  });
+}
+
+volley_status volley_occluded_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
+                                            size_t count, uint8_t* occluded) {
+  return guarded("volley_occluded_stream_masked", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    if (count == 0) return;
+    require_pointer(rays, "rays");
+    require_pointer(masks, "masks");
+    require_pointer(occluded, "occluded");
+    scene->accel.occluded(as_cpp(rays), masks, count, occluded);
   });
 }
 

@@ -229,6 +229,14 @@ volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometr
   });
 }
 
+volley_status volley_scene_set_geometry_mask(volley_scene* scene, uint32_t geometry, uint32_t mask) {
+  return guarded("volley_scene_set_geometry_mask", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
+    require_pointer(scene, "scene");
+    scene->accel.set_geometry_mask(geometry, mask);
+    scene->committed = false;
+  });
+}
+
 void volley_commit_options_default(volley_commit_options* options) {
   if (options == nullptr) return;
   options->test = VOLLEY_TEST_WATERTIGHT;
@@ -273,6 +281,7 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.refitted = a.refitted ? 1 : 0;
     out.sah_growth = a.sah_growth;
     out.loaded = a.loaded ? 1 : 0;
+    out.layers = a.layers;
     out.load_seconds = a.load_seconds;
     *info = out;
   });

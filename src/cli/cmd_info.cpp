@@ -31,6 +31,9 @@ Runner register_info(CLI::App& app) {
                 info.degenerate, info.polygons, desc.mesh.positions.size());
     std::printf("geometries  %zu (%zu objects of triangles, %zu polygons; each hit names its geometry)\n",
                 info.geometries, info.geometries - info.polygons, info.polygons);
+    if (info.layers > 1)
+      std::printf("masks       %zu distinct object masks: one BVH each (a ray walks those its mask shares a bit with)\n",
+                  info.layers);
     std::printf("materials   %zu; lights %zu%s\n", scene.materials().size(), scene.lights().size(),
                 desc.lights.empty() ? " (automatic)" : "");
     std::printf("camera      %s, %dx%d\n", desc.has_camera ? "from scene" : "automatic (frames the bounds)",

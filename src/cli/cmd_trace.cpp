@@ -5,17 +5,19 @@
 //
 //   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
 //          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N robust=0|1
-//          reference=0|1                                                    (one line)
+//          reference=0|1 mask=M|none                                        (one line)
 //
 // packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
 // hits counts closest hits, or blocked rays with --occluded; robust=0 with --fast-slabs,
-// reference=1 with --reference. Keys are only ever added.
+// reference=1 with --reference, mask the --mask the rays were traced with. Keys are only
+// ever added.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -41,6 +43,7 @@ struct TraceArgs {
   std::string output;
   std::string save;  ///< write the built structure here
   std::string load;  ///< map the structure from here instead of building it
+  std::optional<std::uint32_t> mask;  ///< the rays' mask (the masked query forms)
   bool occluded = false;
   std::string mode = "single";
   int packet = 16;
@@ -63,46 +66,54 @@ struct Answers {
 /// Traces rays[begin, end) into `out` (the same indices).
 using ChunkTracer = std::function<void(std::size_t begin, std::size_t end, Answers& out)>;
 
+/// Packets of K consecutive rays; `masks` (one per ray) picks the masked query forms.
 template <int K>
-void trace_packets(const Accel& accel, const Ray* rays, std::size_t begin, std::size_t end, bool occluded,
-                   Answers& out) {
+void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t begin,
+                   std::size_t end, bool occluded, Answers& out) {
   RayPacket<K> packet;
   HitPacket<K> hits;
   for (std::size_t i = begin; i < end; i += K) {
     const int count = int(std::min<std::size_t>(K, end - i));
     load(packet, rays + i, count);
     if (occluded) {
-      const std::uint32_t mask = accel.occluded(packet);
+      const std::uint32_t mask = masks ? accel.occluded(packet, masks + i) : accel.occluded(packet);
       for (int l = 0; l < count; ++l) out.blocked[i + l] = std::uint8_t((mask >> l) & 1u);
     } else {
       reset(hits);
-      accel.intersect(packet, hits);
+      masks ? accel.intersect(packet, hits, masks + i) : accel.intersect(packet, hits);
       store(hits, out.hits.data() + i, count);
     }
   }
 }
 
-ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::string& mode, int packet,
-                        bool occluded) {
+/// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms.
+ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
+                        const std::string& mode, int packet, bool occluded) {
   const Ray* r = rays.data();
   if (mode == "packet") {
-    return [&accel, r, packet, occluded](std::size_t begin, std::size_t end, Answers& out) {
-      if (packet == 4) trace_packets<4>(accel, r, begin, end, occluded, out);
-      else if (packet == 8) trace_packets<8>(accel, r, begin, end, occluded, out);
-      else trace_packets<16>(accel, r, begin, end, occluded, out);
+    return [&accel, r, masks, packet, occluded](std::size_t begin, std::size_t end, Answers& out) {
+      if (packet == 4) trace_packets<4>(accel, r, masks, begin, end, occluded, out);
+      else if (packet == 8) trace_packets<8>(accel, r, masks, begin, end, occluded, out);
+      else trace_packets<16>(accel, r, masks, begin, end, occluded, out);
     };
   }
   if (mode == "stream") {
-    return [&accel, r, occluded](std::size_t begin, std::size_t end, Answers& out) {
-      if (occluded) accel.occluded(r + begin, end - begin, out.blocked.data() + begin);
-      else accel.intersect(r + begin, end - begin, out.hits.data() + begin);
+    return [&accel, r, masks, occluded](std::size_t begin, std::size_t end, Answers& out) {
+      const std::uint32_t* m = masks ? masks + begin : nullptr;
+      if (occluded) {
+        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin)
+          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin);
+      } else {
+        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin)
+          : accel.intersect(r + begin, end - begin, out.hits.data() + begin);
+      }
     };
   }
-  return [&accel, r, occluded](std::size_t begin, std::size_t end, Answers& out) {
+  return [&accel, r, masks, occluded](std::size_t begin, std::size_t end, Answers& out) {
     if (occluded) {
-      for (std::size_t i = begin; i < end; ++i) out.blocked[i] = accel.occluded(r[i]) ? 1 : 0;
+      for (std::size_t i = begin; i < end; ++i) out.blocked[i] = (masks ? accel.occluded(r[i], masks[i]) : accel.occluded(r[i])) ? 1 : 0;
     } else {
-      for (std::size_t i = begin; i < end; ++i) out.hits[i] = accel.intersect(r[i]);
+      for (std::size_t i = begin; i < end; ++i) out.hits[i] = masks ? accel.intersect(r[i], masks[i]) : accel.intersect(r[i]);
     }
   };
 }
@@ -147,6 +158,10 @@ Runner register_trace(CLI::App& app) {
   cmd->add_option("--reps", args->reps, "Timed repetitions; the best is reported")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  cmd->add_option("--mask", args->mask,
+                  "Trace every ray with this 32-bit mask (the masked query forms): it hits only objects whose\n"
+                  "\"mask\" shares a bit with it")
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{0xffffffffu}));
   cmd->add_option("--save", args->save,
                   "Write the built structure to this file (Accel::save), to --load it later instead of building");
   cmd->add_option("--load", args->load,
@@ -166,7 +181,8 @@ Runner register_trace(CLI::App& app) {
 
     const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
-    const ChunkTracer trace = make_tracer(accel, rays, a.mode, a.packet, a.occluded);
+    const std::vector<std::uint32_t> masks(a.mask ? rays.size() : 0, a.mask.value_or(kMaskAll));
+    const ChunkTracer trace = make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded);
     Answers answers;
     if (a.occluded) answers.blocked.assign(rays.size(), 0);
     else answers.hits.assign(rays.size(), Hit{});
@@ -189,10 +205,10 @@ Runner register_trace(CLI::App& app) {
     const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
     std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d\n",
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s\n",
                 a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
                 a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
-                info.reference_double ? 1 : 0);
+                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none");
     std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
                 "%.2f Mrays/s; %zu %s (%.1f%%); %s %.3f s\n",
                 a.scene.c_str(), rays.size(), a.rays.c_str(), a.occluded ? "occlusion" : "closest hit", mode.c_str(),

@@ -50,6 +50,7 @@ struct ObjectDesc {
   std::string name;                ///< the object's "name", else its JSON path or file name
   std::size_t first_triangle = 0;  ///< index of its first triangle in MeshDesc
   std::size_t triangle_count = 0;
+  std::uint32_t mask = 0xffffffffu;  ///< the object's "mask" (Accel::set_geometry_mask)
 };
 
 /// All triangles of the scene merged in one indexed mesh (object transforms applied),
@@ -68,6 +69,7 @@ struct PolygonDesc {
   std::string name;
   std::vector<glm::vec3> vertices;
   std::uint32_t material = 0;
+  std::uint32_t mask = 0xffffffffu;  ///< the object's "mask" (Accel::set_geometry_mask)
 };
 
 /// Render settings a scene may carry; command-line options override them.

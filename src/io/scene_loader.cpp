@@ -308,25 +308,30 @@ void read_objects(const Json& j, const JsonPath& at, Context& ctx) {
     if (!obj.contains("type")) oat.fail("missing key \"type\" (mesh, triangles or polygon)");
     const std::string& type = get_string(obj["type"], oat["type"]);
     if (type == "mesh") {
-      check_object(obj, oat, {"type", "name", "file", "material", "transform"});
+      check_object(obj, oat, {"type", "name", "file", "material", "transform", "mask"});
     } else if (type == "triangles") {
-      check_object(obj, oat, {"type", "name", "vertices", "indices", "material", "transform"});
+      check_object(obj, oat, {"type", "name", "vertices", "indices", "material", "transform", "mask"});
     } else if (type == "polygon") {
-      check_object(obj, oat, {"type", "name", "vertices", "material", "transform"});
+      check_object(obj, oat, {"type", "name", "vertices", "material", "transform", "mask"});
     } else {
       oat["type"].fail("unknown object type \"" + type + "\" (expected mesh, triangles or polygon)");
     }
     if (obj.contains("name")) get_string(obj["name"], oat["name"]);
+    const std::uint32_t mask =
+        obj.contains("mask") ? static_cast<std::uint32_t>(get_int(obj["mask"], oat["mask"], 0, 0xffffffffll)) : 0xffffffffu;
     const glm::mat4 transform =
         obj.contains("transform") ? read_transform(obj["transform"], oat["transform"]) : glm::mat4(1.0f);
     MeshDesc& mesh = ctx.scene.mesh;
     const std::size_t first = mesh.triangle_count();
     if (type == "mesh") read_mesh(obj, oat, transform, ctx);
     if (type == "triangles") read_triangles(obj, oat, transform, ctx);
-    if (type == "polygon") read_polygon(obj, oat, transform, ctx);
-    if (type != "polygon")
+    if (type == "polygon") {
+      read_polygon(obj, oat, transform, ctx);
+      ctx.scene.polygons.back().mask = mask;
+    } else {
       mesh.objects.push_back({obj.contains("name") ? obj["name"].get<std::string>() : oat.str(), first,
-                              mesh.triangle_count() - first});
+                              mesh.triangle_count() - first, mask});
+    }
   }
 }
 

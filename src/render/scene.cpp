@@ -71,15 +71,21 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   const bool load = !structure.empty();
   for (const io::ObjectDesc& o : objects) {
     if (positions_.empty()) break;
-    if (!load)
-      accel_.add_triangles(&positions_[0].x, positions_.size(), indices_.data() + 3 * o.first_triangle,
-                           o.triangle_count);
+    if (!load) {
+      const std::uint32_t id = accel_.add_triangles(&positions_[0].x, positions_.size(),
+                                                    indices_.data() + 3 * o.first_triangle, o.triangle_count);
+      if (o.mask != kMaskAll) accel_.set_geometry_mask(id, o.mask);
+    }
     geometry_base_.push_back(static_cast<std::uint32_t>(o.first_triangle));
   }
   for (const auto& poly : desc.polygons) {
     geometry_base_.push_back(static_cast<std::uint32_t>(indices_.size() / 3 + polygons_.size()));
     try {
-      if (!load) accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
+      if (!load) {
+        const std::uint32_t id =
+            accel_.add_polygon(reinterpret_cast<const float*>(poly.vertices.data()), poly.vertices.size());
+        if (poly.mask != kMaskAll) accel_.set_geometry_mask(id, poly.mask);
+      }
     } catch (const Error& e) {
       throw Error("polygon '" + poly.name + "': " + e.what());
     }

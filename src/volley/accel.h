@@ -37,6 +37,8 @@ struct AccelInfo {
   std::size_t polygons = 0;        ///< planar polygons added
   std::size_t geometries = 0;      ///< geometries (one per add_triangles / add_polygon call)
   std::size_t disabled = 0;        ///< geometries disabled at the commit (left out of the structure)
+  std::size_t layers = 0;          ///< BVHs, one per distinct geometry mask (1 when no mask was set; 0: nothing to hit);
+                                   ///< with several, nodes / leaves / blocks / bytes are summed and the costs are the largest's
   bool loaded = false;             ///< the structure was mapped from a file (Accel::load), not built here
   bool refitted = false;           ///< the last commit refitted the BVH (Options::refit) instead of building it
   double sah_growth = 1.0;         ///< triangle SAH cost now / at the last full build (1 after a build)
@@ -100,6 +102,15 @@ class VOLLEY_API Accel {
   /// one). Uncommits the Accel. Throws Error for an id no add call returned.
   void enable_geometry(std::uint32_t geometry);
 
+  /// Sets a geometry's 32-bit mask (as Embree's rtcSetGeometryMask); the default is
+  /// kMaskAll. A ray given a mask (the query forms that take one) sees the geometry only
+  /// when their masks share a bit; the forms without one see every geometry whose mask is
+  /// not 0. Geometries of one mask share a BVH: a scene that sets no mask keeps its one BVH
+  /// and no mask test anywhere, and a ray walks the BVHs of the masks it shares a bit
+  /// with (AccelInfo::layers). Takes effect at the next commit(); uncommits the Accel.
+  /// Throws Error for an id no add call returned.
+  void set_geometry_mask(std::uint32_t geometry, std::uint32_t mask);
+
   /// Moves the vertices of a triangle geometry: `xyz` holds 3*vertex_count floats, the
   /// same vertex_count as its add_triangles call, and its triangles keep their indices.
   /// Data is copied. The next commit() refits the BVH instead of building it when nothing
@@ -121,6 +132,12 @@ class VOLLEY_API Accel {
   /// True when anything is hit with tmin <= t < tmax.
   bool occluded(const Ray& ray) const;
 
+  /// intersect(ray) for a ray with a mask: only geometries whose mask shares a bit with
+  /// `mask` are hit (mask 0: a miss). Same answers as intersect(ray) on a scene of just those.
+  Hit intersect(const Ray& ray, std::uint32_t mask) const;
+  /// occluded(ray) for a ray with a mask, as intersect(ray, mask).
+  bool occluded(const Ray& ray, std::uint32_t mask) const;
+
   /// Closest hits of the active lanes of a packet (bit i of rays.active), K = 4, 8 or 16.
   /// Lane i searches tmin <= t < min(tmax, hits.t[i]): reset the hits first with
   /// volley::reset(hits) (t = +inf, prim = kInvalidPrim), or pass earlier answers to bound
@@ -135,6 +152,14 @@ class VOLLEY_API Accel {
   template <int K>
   std::uint32_t occluded(const RayPacket<K>& rays) const;
 
+  /// Packets with a mask per lane: masks[i] is lane i's (K of them), as intersect(ray, mask).
+  /// Throws Error for a null masks.
+  template <int K>
+  void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
+  /// Occlusion of a packet with a mask per lane.
+  template <int K>
+  std::uint32_t occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const;
+
   /// Closest hits of a stream of `count` rays: hits[i] answers rays[i] (a miss where
   /// nothing is hit; every entry written). Policy: the stream is cut into runs of 16
   /// consecutive rays (the rest ray by ray). With AVX-512 every run is traced as a packet
@@ -147,6 +172,10 @@ class VOLLEY_API Accel {
   /// Occlusion of a stream: blocked[i] = 1 when rays[i] is occluded, else 0. Regrouped as
   /// intersect(rays, count, hits).
   void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const;
+  /// Streams with a mask per ray: masks[i] is rays[i]'s, as intersect(ray, mask). Throws
+  /// Error for a null masks with count > 0.
+  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
+  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
 
   /// Facts about the committed structure.
   AccelInfo info() const;

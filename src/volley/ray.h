@@ -12,6 +12,10 @@ inline constexpr std::uint32_t kInvalidPrim = 0xffffffffu;
 /// instance.
 inline constexpr std::uint32_t kInvalidId = 0xffffffffu;
 
+/// The default geometry mask, and the ray mask of the queries that take none: every bit.
+/// A ray sees a geometry when their masks share a bit (Accel::set_geometry_mask).
+inline constexpr std::uint32_t kMaskAll = 0xffffffffu;
+
 /// One ray: r(t) = org + t * dir, searched over tmin <= t < tmax.
 /// The direction need not be normalized; t is in units of |dir|.
 /// Same field order as a `.vray` record (32 bytes).

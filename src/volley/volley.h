@@ -47,6 +47,8 @@ extern "C" {
 #define VOLLEY_INVALID_PRIM 0xffffffffu
 /** geom of a miss; inst of a miss or of a hit not made through an instance. */
 #define VOLLEY_INVALID_ID 0xffffffffu
+/** The default geometry mask: every bit (volley_scene_set_geometry_mask). */
+#define VOLLEY_MASK_ALL 0xffffffffu
 
 /** Alignment of the packet structs below: 64 bytes (one cache line, any SIMD width).
  *  Stack variables of those types get it from the compiler; heap memory must come from
@@ -192,6 +194,7 @@ typedef struct volley_scene_info {
   int refitted;              /**< nonzero: the last commit refitted the BVH instead of building it */
   double sah_growth;         /**< SAH cost of the triangle BVH now / at the last full build */
   int loaded;                /**< nonzero: the structure was mapped from a file (volley_scene_load), not built */
+  size_t layers;             /**< BVHs, one per distinct geometry mask (volley::AccelInfo::layers) */
   double load_seconds;       /**< wall time of volley_scene_load (0 when built) */
 } volley_scene_info;
 
@@ -268,6 +271,13 @@ VOLLEY_API volley_status volley_scene_update_vertices(volley_scene* scene, uint3
  *  enabled one, but the scene must still be committed again).
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
 VOLLEY_API volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometry);
+
+/** Sets a geometry's 32-bit mask (volley::Accel::set_geometry_mask; default
+ *  VOLLEY_MASK_ALL): the masked queries see it only when their mask shares a bit with it.
+ *  Geometries of one mask share a BVH; a scene that sets none keeps one. The scene must
+ *  be committed again before the next query.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
+VOLLEY_API volley_status volley_scene_set_geometry_mask(volley_scene* scene, uint32_t geometry, uint32_t mask);
 
 /** Builds the acceleration structure with the given test and ISA (VOLLEY_TEST_WATERTIGHT
  *  and VOLLEY_ISA_AUTO are the defaults of volley trace and volley render). May be called
@@ -383,6 +393,44 @@ VOLLEY_API volley_status volley_intersect_stream(const volley_scene* scene, cons
  *  volley_intersect_stream otherwise. */
 VOLLEY_API volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                                 uint8_t* occluded);
+
+/* Ray masks (as Embree's): a geometry has a 32-bit mask (volley_scene_set_geometry_mask,
+ * default VOLLEY_MASK_ALL); a query with a mask sees only the geometries whose mask shares
+ * a bit with it (mask 0: nothing). The queries above, without a mask, see every geometry
+ * whose mask is not 0. Each masked form answers as its unmasked twin would on the scene
+ * without the geometries the mask hides; its errors are the twin's, plus
+ * VOLLEY_ERROR_INVALID_ARGUMENT for masks = NULL. */
+
+/** volley_intersect1 for a ray with a mask. */
+VOLLEY_API volley_status volley_intersect1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask,
+                                                  volley_hit* hit);
+/** volley_occluded1 for a ray with a mask. */
+VOLLEY_API volley_status volley_occluded1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask,
+                                                 int* occluded);
+/** volley_intersect4 with masks[i] the mask of lane i (4 masks; no alignment needed). */
+VOLLEY_API volley_status volley_intersect4_masked(const volley_scene* scene, const volley_ray_packet4* rays,
+                                                  const uint32_t* masks, volley_hit_packet4* hits);
+/** volley_intersect8 with a mask per lane. */
+VOLLEY_API volley_status volley_intersect8_masked(const volley_scene* scene, const volley_ray_packet8* rays,
+                                                  const uint32_t* masks, volley_hit_packet8* hits);
+/** volley_intersect16 with a mask per lane. */
+VOLLEY_API volley_status volley_intersect16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
+                                                   const uint32_t* masks, volley_hit_packet16* hits);
+/** volley_occluded4 with a mask per lane. */
+VOLLEY_API volley_status volley_occluded4_masked(const volley_scene* scene, const volley_ray_packet4* rays,
+                                                 const uint32_t* masks, uint32_t* occluded);
+/** volley_occluded8 with a mask per lane. */
+VOLLEY_API volley_status volley_occluded8_masked(const volley_scene* scene, const volley_ray_packet8* rays,
+                                                 const uint32_t* masks, uint32_t* occluded);
+/** volley_occluded16 with a mask per lane. */
+VOLLEY_API volley_status volley_occluded16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
+                                                  const uint32_t* masks, uint32_t* occluded);
+/** volley_intersect_stream with masks[i] the mask of rays[i]. */
+VOLLEY_API volley_status volley_intersect_stream_masked(const volley_scene* scene, const volley_ray* rays,
+                                                        const uint32_t* masks, size_t count, volley_hit* hits);
+/** volley_occluded_stream with masks[i] the mask of rays[i]. */
+VOLLEY_API volley_status volley_occluded_stream_masked(const volley_scene* scene, const volley_ray* rays,
+                                                       const uint32_t* masks, size_t count, uint8_t* occluded);
 
 /** Checks rays without tracing them: VOLLEY_OK when every ray can hit something;
  *  VOLLEY_ERROR_INVALID_RAY for the first ray that is always a miss (non-finite origin or

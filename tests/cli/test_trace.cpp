@@ -324,3 +324,39 @@ TEST_CASE("trace --save / --load: the loaded structure gives the same hit file; 
   CHECK(has(r.output, "corrupted.vacc: checksum mismatch"));
   CHECK(run("trace " + kCornell + " --rays " + rays.string() + " --load /nonexistent/x.vacc").status != 0);
 }
+
+TEST_CASE("trace --mask: rays see the objects whose \"mask\" shares a bit with theirs") {
+  const fs::path scene = temp_file("masked.json", R"({"camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0], "fov": 60},
+    "objects": [
+      {"type": "triangles", "name": "front", "mask": 1, "vertices": [[-1,-1,1],[1,-1,1],[0,1,1]], "indices": [[0,1,2]]},
+      {"type": "triangles", "name": "back", "mask": 2, "vertices": [[-2,-2,0],[2,-2,0],[0,2,0]], "indices": [[0,1,2]]},
+      {"type": "polygon", "name": "hidden", "mask": 0, "vertices": [[-3,-3,2],[3,-3,2],[3,3,2],[-3,3,2]]}]})");
+  const fs::path rays = temp_path("masked.vray");
+  REQUIRE(run("rays " + scene.string() + " --workload primary --width 32 --height 32 -o " + rays.string()).status == 0);
+  std::map<std::string, std::size_t> hits;
+  for (const std::string mode : {"single", "packet", "stream"})
+    for (const std::string mask : {"", "1", "2", "4", "3"}) {
+      const Run r = run("trace " + scene.string() + " --rays " + rays.string() + " --reps 1 --mode " + mode +
+                        (mask.empty() ? "" : " --mask " + mask));
+      REQUIRE(r.status == 0);
+      auto kv = trace_line(r.output);
+      CHECK(kv["mask"] == (mask.empty() ? "none" : mask));
+      const std::size_t n = std::stoul(kv["hits"]);
+      if (mode != "single") CHECK(n == hits[mask]);  // every mode the same
+      hits[mask] = n;
+    }
+  // The hidden polygon (mask 0) covers everything and is never hit; "back" covers "front".
+  CHECK(hits["1"] > 0);
+  CHECK(hits["1"] < hits["2"]);
+  CHECK(hits["2"] == hits[""]);
+  CHECK(hits["3"] == hits[""]);
+  CHECK(hits["4"] == 0);
+  const Run info = run("info " + scene.string());
+  CHECK(has(info.output, "2 distinct object masks"));
+  CHECK(run("trace " + scene.string() + " --rays " + rays.string() + " --mask 4294967296").status != 0);
+  const fs::path bad = temp_file("badmask.json", R"({"objects": [{"type": "triangles", "mask": -1,
+    "vertices": [[0,0,0],[1,0,0],[0,1,0]], "indices": [[0,1,2]]}]})");
+  const Run r = run("info " + bad.string());
+  CHECK(r.status != 0);
+  CHECK(has(r.output, "mask"));
+}

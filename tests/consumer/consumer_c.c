@@ -402,6 +402,58 @@ static void check_refit(void) {
   volley_scene_destroy(scene);
 }
 
+/* Masks: the table (geometry 1) masked 0x2; rays of mask 0x1 see the floor under it, rays
+ * of mask 0x2 the table, in every masked form; mask 0 sees nothing. */
+static void check_masks(void) {
+  volley_scene* scene = make_scene();
+  volley_ray r = scene_ray(0);
+  volley_hit h;
+  int blocked = 7;
+  uint32_t masks[16], blocked_lanes = 0;
+  volley_ray rays[16];
+  volley_hit hits[16];
+  volley_scene_info info;
+  volley_ray_packet16 packet;
+  volley_hit_packet16 hit_packet;
+  int k;
+  r.org[0] = 0.5f, r.org[1] = 0.25f; /* over the table, which lies on the floor */
+  expect(volley_scene_set_geometry_mask(scene, 1, 0x2u), VOLLEY_OK, "volley_scene_set_geometry_mask");
+  expect(volley_scene_set_geometry_mask(scene, 7, 0x2u), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_set_geometry_mask");
+  expect(volley_scene_set_geometry_mask(NULL, 1, 0x2u), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_set_geometry_mask");
+  expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
+  expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
+  check(info.layers == 2, "two masks, two layers", (int)info.layers);
+  expect(volley_intersect1_masked(scene, &r, 0x1u, &h), VOLLEY_OK, "volley_intersect1_masked");
+  check(h.geom == 0, "mask 0x1: the floor", (int)h.geom);
+  expect(volley_intersect1_masked(scene, &r, 0x2u, &h), VOLLEY_OK, "volley_intersect1_masked");
+  check(h.geom == 1, "mask 0x2: the table", (int)h.geom);
+  expect(volley_intersect1(scene, &r, &h), VOLLEY_OK, "volley_intersect1");
+  check(h.geom == 1, "no mask: the table", (int)h.geom);
+  expect(volley_occluded1_masked(scene, &r, 0x0u, &blocked), VOLLEY_OK, "volley_occluded1_masked");
+  check(blocked == 0, "mask 0 sees nothing", blocked);
+  for (k = 0; k < 16; ++k) rays[k] = r, masks[k] = (k & 1) ? 0x2u : 0x1u;
+  expect(volley_intersect_stream_masked(scene, rays, masks, 16, hits), VOLLEY_OK, "volley_intersect_stream_masked");
+  for (k = 0; k < 16; ++k) check(hits[k].geom == ((k & 1) ? 1u : 0u), "stream lane by its mask", k);
+  for (k = 0; k < 16; ++k) {
+    packet.ox[k] = r.org[0], packet.oy[k] = r.org[1], packet.oz[k] = r.org[2];
+    packet.dx[k] = r.dir[0], packet.dy[k] = r.dir[1], packet.dz[k] = r.dir[2];
+    packet.tmin[k] = r.tmin, packet.tmax[k] = r.tmax;
+    masks[k] = (k % 3 == 0) ? 0x0u : (k & 1) ? 0x2u : 0x1u;
+  }
+  packet.active = 0xffffu;
+  volley_reset_hits16(&hit_packet);
+  expect(volley_intersect16_masked(scene, &packet, masks, &hit_packet), VOLLEY_OK, "volley_intersect16_masked");
+  for (k = 0; k < 16; ++k)
+    check(hit_packet.geom[k] == ((k % 3 == 0) ? VOLLEY_INVALID_ID : (k & 1) ? 1u : 0u), "packet lane by its mask", k);
+  expect(volley_occluded16_masked(scene, &packet, masks, &blocked_lanes), VOLLEY_OK, "volley_occluded16_masked");
+  for (k = 0; k < 16; ++k) check(((blocked_lanes >> k) & 1u) == (k % 3 != 0), "occluded lane by its mask", k);
+  expect(volley_intersect16_masked(scene, &packet, NULL, &hit_packet), VOLLEY_ERROR_INVALID_ARGUMENT,
+         "volley_intersect16_masked");
+  expect(volley_occluded_stream_masked(scene, rays, NULL, 16, (uint8_t*)hits), VOLLEY_ERROR_INVALID_ARGUMENT,
+         "volley_occluded_stream_masked");
+  volley_scene_destroy(scene);
+}
+
 /* Save and load: a loaded scene answers every ray bit for bit as the saved one, at every
  * ISA this CPU has; it reports itself loaded; bad paths and files fail with
  * VOLLEY_ERROR_FILE and leave *out alone. */
@@ -478,6 +530,7 @@ int main(void) {
   check_geometries();
   check_refit();
   check_save_load();
+  check_masks();
   if (failures) {
     printf("consumer_c: %d failures\n", failures);
     return 1;

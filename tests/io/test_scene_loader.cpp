@@ -259,7 +259,7 @@ TEST_CASE("scene: validation errors name the file and the JSON path") {
        R"(objects[0].type: unknown object type "sphere" (expected mesh, triangles or polygon))"},
       {"missing type", obj_with + R"({"file": "ok.obj"}]})", R"(objects[0]: missing key "type" (mesh, triangles or polygon))"},
       {"unknown object key", obj_with + R"({"type": "mesh", "file": "ok.obj", "colour": "red"}]})",
-       R"(objects[0]: unknown key "colour" (allowed keys: type, name, file, material, transform))"},
+       R"(objects[0]: unknown key "colour" (allowed keys: type, name, file, material, transform, mask))"},
       {"unknown material", R"({"materials": {"white": {}, "red": {}}, "objects": [{"type": "mesh", "file": "ok.obj", "material": "whte"}]})",
        R"(objects[0].material: unknown material "whte" (defined: white, red))"},
       {"unknown material, none defined", obj_with + R"({"type": "mesh", "file": "ok.obj", "material": "white"}]})",

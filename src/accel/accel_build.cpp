@@ -1,0 +1,231 @@
+// Accel::Impl at commit: the layers (one per geometry mask) built or refitted, and the
+// facts info() reports.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <functional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "accel/accel_impl.h"
+#include "core/triangle.h"
+#include "simd/aligned.h"
+
+namespace volley {
+namespace {
+
+core::BBox triangle_box(const glm::vec3* p) {
+  core::BBox b;
+  for (int k = 0; k < 3; ++k) b.extend(p[k]);
+  return b;
+}
+
+}  // namespace
+
+std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, bool polygon) {
+  if (geometries.size() >= kInvalidId) throw Error("add: the Accel holds the most geometries it can");
+  geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon, true, {}, 0, false});
+  committed = false;
+  topology_changed = true;
+  return static_cast<std::uint32_t>(geometries.size() - 1);
+}
+
+Accel::Impl::Geometry& Accel::Impl::geometry_at(const char* caller, std::uint32_t geometry) {
+  if (geometry >= geometries.size())
+    throw Error(std::string(caller) + ": geometry " + std::to_string(geometry) + " does not exist (ids 0 .. " +
+                std::to_string(geometries.size()) + " exclusive were returned by add_triangles / add_polygon)");
+  return geometries[geometry];
+}
+
+bool Accel::Impl::flat(std::size_t i) const {
+  const glm::vec3* p = &triangles[3 * i];
+  // The reference keeps what has area in double (a float cross product can round to 0).
+  return reference_double ? core::is_degenerate<double>(core::Vec3<double>(p[0]), core::Vec3<double>(p[1]),
+                                                        core::Vec3<double>(p[2]))
+                          : core::is_degenerate(p[0], p[1], p[2]);
+}
+
+void Accel::Impl::attribute_search(std::uint32_t& prim, std::uint32_t& geom) const {
+  // The last geometry whose first id is <= prim (empty geometries share their first id with
+  // the next one; the search passes them).
+  const auto it = std::upper_bound(geometries.begin(), geometries.end(), prim,
+                                   [](std::uint32_t id, const Geometry& g) { return id < g.first; });
+  const auto g = it - 1;
+  geom = static_cast<std::uint32_t>(g - geometries.begin());
+  prim -= g->first;
+}
+
+std::vector<std::uint32_t> Accel::Impl::layer_masks() const {
+  std::vector<std::uint32_t> masks;
+  for (const Geometry& g : geometries)
+    if (g.enabled && g.mask != 0) masks.push_back(g.mask);
+  std::sort(masks.begin(), masks.end(), std::greater<>());
+  masks.erase(std::unique(masks.begin(), masks.end()), masks.end());
+  return masks;
+}
+
+void Accel::Impl::exclude_others(Layer& layer) const {
+  layer.excluded = excluded_flat;
+  for (const Geometry& g : geometries)
+    if (!g.polygon && (!g.enabled || g.mask != layer.mask))
+      std::fill_n(layer.excluded.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
+}
+
+void Accel::Impl::build() {
+  const std::size_t n = triangle_ids.size();
+  layers.clear();
+  wide_only = nullptr;
+  degenerate = 0;
+  disabled = 0;
+  // Triangles of moved geometries (update_vertices) go into the tree even when degenerate,
+  // so that a refit finds them where a later move gives them area.
+  std::vector<unsigned char> moving(n, 0);
+  for (const Geometry& g : geometries) {
+    if (g.moved) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
+    disabled += !g.enabled;
+  }
+  std::vector<unsigned char> is_degenerate(n, 0);
+  excluded_flat.assign(n, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      is_degenerate[i] = flat(i);
+      excluded_flat[i] = is_degenerate[i] && !moving[i];
+    }
+  });
+  degenerate = static_cast<std::size_t>(std::count(is_degenerate.begin(), is_degenerate.end(), 1));
+
+  for (const std::uint32_t mask : layer_masks()) {
+    Layer& layer = layers.emplace_back();
+    layer.mask = mask;
+    const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
+      return g.enabled && !g.polygon && g.mask == mask;
+    });
+    if (has_triangles) {
+      exclude_others(layer);
+      // Triangles outside the layer and degenerate ones keep an empty box: no node holds them.
+      simd::AlignedVector<core::BBox> boxes(n);  // huge pages: 24 MB for a million triangles
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+          if (!layer.excluded[i]) boxes[i] = triangle_box(&triangles[3 * i]);
+      });
+      layer.triangle_engine = isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
+                              : reference_double ? accel::make_reference_engine(test)
+                                                 : accel::make_oracle_engine(test, robust);
+      core::Bvh bvh = core::build_bvh(boxes, layer.triangle_engine->bvh_options());
+      // Reported with unit costs (AccelInfo: node visit = 1, triangle test = 1).
+      layer.triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
+      layer.triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, layer.excluded.data()});
+      layer.built_sah = layer.sah_now = layer.triangle_engine->sah_cost();
+    }
+    build_polygons(layer);
+  }
+  finish_build();
+}
+
+void Accel::Impl::build_polygons(Layer& layer) {
+  layer.polygon_engine.reset();
+  layer.polygons.clear();
+  layer.polygon_ids.clear();
+  for (const Geometry& g : geometries)
+    if (g.enabled && g.polygon && g.mask == layer.mask) {
+      layer.polygons.push_back(polygons[g.index]);
+      layer.polygon_ids.push_back(polygon_ids[g.index]);
+    }
+  if (!layer.polygons.empty())
+    layer.polygon_engine = accel::make_polygon_engine(layer.polygons, layer.polygon_ids, robust);
+}
+
+void Accel::Impl::finish_build() {
+  wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine
+                  ? layers[0].triangle_engine->wide()
+                  : nullptr;
+  one_geometry = geometries.size() == 1;
+  topology_changed = vertices_changed = refitted = false;
+  built_with = {test, isa, robust, reference_double};
+}
+
+double Accel::Impl::built_sah() const {
+  double sum = 0.0;
+  for (const Layer& l : layers) sum += l.built_sah;
+  return sum;
+}
+
+double Accel::Impl::sah_now() const {
+  double sum = 0.0;
+  for (const Layer& l : layers) sum += l.sah_now;
+  return sum;
+}
+
+bool Accel::Impl::refit(const Options& options) {
+  const bool same = options.test == built_with.test && options.isa == built_with.isa &&
+                    options.robust == built_with.robust && options.reference_double == built_with.reference_double;
+  const bool any_triangles = std::any_of(layers.begin(), layers.end(), [](const Layer& l) { return l.triangle_engine != nullptr; });
+  if (!options.refit || !same || topology_changed || !vertices_changed || !any_triangles) return false;
+  // A triangle the build left out as degenerate that now has area needs a build (which
+  // puts every triangle of a moved geometry into the tree).
+  const std::size_t n = triangle_ids.size();
+  std::atomic<bool> gained_area{false};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end() && !gained_area.load(std::memory_order_relaxed); ++i)
+      if (excluded_flat[i] && !flat(i)) gained_area = true;
+  });
+  if (gained_area) return false;
+  // The wide BVH's blocks name triangles by internal id: the same as the triangle's place
+  // unless polygons came in between (ids rise, so the last one tells).
+  std::vector<std::uint32_t> index_of;
+  if (triangle_ids.back() != n - 1) {
+    index_of.assign(next_id, 0);
+    for (std::size_t i = 0; i < n; ++i) index_of[triangle_ids[i]] = static_cast<std::uint32_t>(i);
+  }
+  for (Layer& l : layers)
+    if (l.triangle_engine)
+      l.sah_now = l.triangle_engine->refit({triangles.data(), triangle_ids.data(), n, l.excluded.data()},
+                                           index_of.empty() ? nullptr : index_of.data());
+  if (!(sah_now() <= kRefitRebuildGrowth * built_sah())) return false;
+  vertices_changed = false;
+  refitted = true;
+  return true;
+}
+
+AccelInfo Accel::Impl::info() const {
+  AccelInfo info;
+  info.triangles = triangle_count();
+  info.loaded = loaded;
+  info.load_seconds = loaded ? load_seconds : 0.0;
+  info.degenerate = degenerate;
+  info.polygons = polygons.size();
+  info.geometries = geometries.size();
+  info.disabled = disabled;
+  info.layers = layers.size();
+  info.refitted = refitted;
+  info.sah_growth = built_sah() > 0.0 ? sah_now() / built_sah() : 1.0;
+  info.test = test;
+  info.isa = isa;
+  info.robust = robust;
+  info.reference_double = reference_double;
+  info.build_seconds = build_seconds;
+  // One layer as its engines describe it; several: the counts summed, the costs and the
+  // shape of the layer with the most nodes.
+  std::size_t most_nodes = 0;
+  for (const Layer& l : layers) {
+    AccelInfo part = info;
+    part.nodes = part.leaves = part.depth = part.bytes = part.blocks = 0;
+    if (l.triangle_engine && l.triangle_stats.nodes != 0) {
+      part.binary_sah_cost = l.triangle_stats.sah_cost;
+      l.triangle_engine->describe(part);
+    }
+    if (l.polygon_engine) l.polygon_engine->describe(part);
+    const std::size_t nodes = info.nodes + part.nodes, leaves = info.leaves + part.leaves,
+                      bytes = info.bytes + part.bytes, blocks = info.blocks + part.blocks;
+    const std::size_t depth = std::max(info.depth, part.depth);
+    if (part.nodes >= most_nodes) {
+      most_nodes = part.nodes;
+      info = part;
+    }
+    info.nodes = nodes, info.leaves = leaves, info.bytes = bytes, info.blocks = blocks, info.depth = depth;
+  }
+  return info;
+}
+
+}  // namespace volley

@@ -1,0 +1,164 @@
+// Accel::Impl's queries: single rays and packets through the layers a ray's mask selects,
+// triangles then polygons in each, the answer attributed to its geometry.
+#include <cmath>
+#include <cstring>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+namespace {
+
+/// Copies the lanes `lanes` of `p` into a 16-lane packet; every other lane is inert and
+/// inactive. The kernels load and store whole chunks of lanes, so a packet with inactive
+/// lanes reaches them only as this copy: the caller's inactive lanes are never read (they
+/// may be uninitialised) nor written (they may be another thread's).
+template <int K>
+void widen(const RayPacket<K>& p, std::uint32_t lanes, RayPacket<16>& out) {
+  for (int i = 0; i < 16; ++i) {
+    if (i < K && (lanes >> i & 1u)) {
+      out.ox[i] = p.ox[i], out.oy[i] = p.oy[i], out.oz[i] = p.oz[i];
+      out.dx[i] = p.dx[i], out.dy[i] = p.dy[i], out.dz[i] = p.dz[i];
+      out.tmin[i] = p.tmin[i], out.tmax[i] = p.tmax[i];
+    } else {
+      out.ox[i] = out.oy[i] = out.oz[i] = out.dx[i] = out.dy[i] = out.dz[i] = out.tmin[i] = 0.0f;
+      out.tmax[i] = -INFINITY;
+    }
+  }
+  out.active = lanes;
+}
+
+/// Whether the engines may take the caller's packet as it is: 16 lanes, all active.
+template <int K>
+bool all_lanes_active(const RayPacket<K>& p) {
+  return K == 16 && (p.active & lane_bits(K)) == lane_bits(K);
+}
+
+}  // namespace
+
+template <int K>
+std::uint32_t Accel::Impl::lanes_of(std::uint32_t active, const std::uint32_t* masks, std::uint32_t mask) {
+  if (!masks) return active;
+  std::uint32_t out = 0;
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    if (masks[i] & mask) out |= 1u << i;
+  }
+  return out;
+}
+
+Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
+  Hit hit;
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask)) continue;
+    if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
+    if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+  }
+  attribute(hit.prim, hit.geom);
+  return hit;
+}
+
+bool Accel::Impl::occluded(const Ray& ray, std::uint32_t mask) const {
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask)) continue;
+    if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
+      return true;
+  }
+  return false;
+}
+
+template <int K>
+void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
+  // The lanes an engine writes (a nearer hit: t's bits change) get their geometry and
+  // index; the others keep what the caller passed. Inactive lanes are not read.
+  std::uint32_t before[K];
+  if (!masks && all_lanes_active(rays) && one_geometry) {
+    // Every lane ours and one geometry (prim needs no change): branch-free over all lanes.
+    std::memcpy(before, hits.t, sizeof(before));
+    trace_packet(rays, hits, nullptr);
+    for (int i = 0; i < K; ++i) {
+      std::uint32_t now;
+      std::memcpy(&now, &hits.t[i], 4);
+      const bool written = now != before[i];
+      hits.geom[i] = written ? 0u : hits.geom[i];
+      hits.inst[i] = written ? kInvalidId : hits.inst[i];
+    }
+    return;
+  }
+  const std::uint32_t active = rays.active & lane_bits(K);
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    std::memcpy(&before[i], &hits.t[i], 4);
+  }
+  trace_packet(rays, hits, masks);
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    if (std::memcmp(&before[i], &hits.t[i], 4) == 0) continue;
+    attribute(hits.prim[i], hits.geom[i]);
+    hits.inst[i] = kInvalidId;
+  }
+}
+
+template <int K>
+void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
+  const std::uint32_t active = rays.active & lane_bits(K);
+  if constexpr (K == 16) {
+    // A full packet of a triangles-only scene: straight to the wide kernels, as single rays.
+    if (!masks && wide_only && all_lanes_active(rays)) return wide_only->intersect(rays, hits);
+    if (!masks && layers.size() == 1 && all_lanes_active(rays)) {
+      const Layer& l = layers[0];
+      if (l.triangle_engine) l.triangle_engine->intersect(rays, hits);
+      if (l.polygon_engine) l.polygon_engine->intersect(rays, hits);
+      return;
+    }
+  }
+  HitPacket<16> h;
+  reset(h);
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    set_hit(h, i, hit_of(hits, i));
+  }
+  RayPacket<16> p;
+  for (const Layer& l : layers) {
+    const std::uint32_t lanes = lanes_of<K>(active, masks, l.mask);
+    if (lanes == 0) continue;
+    widen(rays, lanes, p);
+    if (l.triangle_engine) l.triangle_engine->intersect(p, h);
+    if (l.polygon_engine) l.polygon_engine->intersect(p, h);
+  }
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    set_hit(hits, i, hit_of(h, i));
+  }
+}
+
+template <int K>
+std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const {
+  auto trace = [](const Layer& l, const RayPacket<16>& p) {
+    std::uint32_t blocked = l.triangle_engine ? l.triangle_engine->occluded(p, p.active) : 0u;
+    if (l.polygon_engine && (p.active & ~blocked) != 0) blocked |= l.polygon_engine->occluded(p, p.active & ~blocked);
+    return blocked & p.active;
+  };
+  if constexpr (K == 16) {
+    if (!masks && wide_only && all_lanes_active(rays)) return wide_only->occluded(rays);
+    if (!masks && layers.size() == 1 && all_lanes_active(rays)) return trace(layers[0], rays);
+  }
+  const std::uint32_t active = rays.active & lane_bits(K);
+  std::uint32_t blocked = 0;
+  RayPacket<16> p;
+  for (const Layer& l : layers) {
+    const std::uint32_t lanes = lanes_of<K>(active, masks, l.mask) & ~blocked;
+    if (lanes == 0) continue;
+    widen(rays, lanes, p);
+    blocked |= trace(l, p);
+  }
+  return blocked;
+}
+
+template void Accel::Impl::intersect<4>(const RayPacket<4>&, HitPacket<4>&, const std::uint32_t*) const;
+template void Accel::Impl::intersect<8>(const RayPacket<8>&, HitPacket<8>&, const std::uint32_t*) const;
+template void Accel::Impl::intersect<16>(const RayPacket<16>&, HitPacket<16>&, const std::uint32_t*) const;
+template std::uint32_t Accel::Impl::occluded<4>(const RayPacket<4>&, const std::uint32_t*) const;
+template std::uint32_t Accel::Impl::occluded<8>(const RayPacket<8>&, const std::uint32_t*) const;
+template std::uint32_t Accel::Impl::occluded<16>(const RayPacket<16>&, const std::uint32_t*) const;
+
+}  // namespace volley
