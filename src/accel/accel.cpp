@@ -12,7 +12,7 @@
 
 namespace volley {
 
-Accel::Accel() : impl_(std::make_unique<Impl>()) {}
+Accel::Accel() : impl_(std::make_shared<Impl>()) {}
 Accel::~Accel() = default;
 Accel::Accel(Accel&&) noexcept = default;
 Accel& Accel::operator=(Accel&&) noexcept = default;
@@ -89,7 +89,9 @@ void Accel::set_geometry_mask(std::uint32_t geometry, std::uint32_t mask) {
 
 void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_t vertex_count) {
   Impl::Geometry& g = impl_->geometry_at("update_vertices", geometry);
-  if (g.polygon) throw Error("update_vertices: geometry " + std::to_string(geometry) + " is a polygon, not triangles");
+  if (g.polygon || g.instance)
+    throw Error("update_vertices: geometry " + std::to_string(geometry) + " is " +
+                (g.polygon ? "a polygon" : "an instance") + ", not triangles");
   if (vertex_count != g.vertex_count)
     throw Error("update_vertices: geometry " + std::to_string(geometry) + " was added with " +
                 std::to_string(g.vertex_count) + " vertices, got " + std::to_string(vertex_count) +
@@ -236,6 +238,9 @@ AccelInfo Accel::info() const { return impl_->info(); }
 
 void Accel::save(const std::string& path) const {
   if (!impl_->committed) throw Error("save: call commit() first (only a committed structure is saved)");
+  if (!impl_->instances.empty())
+    throw Error("save: this Accel holds instances, which are not saved: save each prototype, and add the instances "
+                "to a new Accel after loading them");
   impl_->save_to(path);
 }
 

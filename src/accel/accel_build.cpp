@@ -99,7 +99,7 @@ void Accel::Impl::build() {
     Layer& layer = layers.emplace_back();
     layer.mask = mask;
     const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
-      return g.enabled && !g.polygon && g.mask == mask;
+      return g.enabled && !g.polygon && !g.instance && g.mask == mask;
     });
     if (has_triangles) {
       exclude_others(layer);
@@ -137,10 +137,12 @@ void Accel::Impl::build_polygons(Layer& layer) {
 }
 
 void Accel::Impl::finish_build() {
-  wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine
+  compute_bounds();
+  build_instances();
+  wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances
                   ? layers[0].triangle_engine->wide()
                   : nullptr;
-  one_geometry = geometries.size() == 1;
+  one_geometry = geometries.size() == 1 && !geometries[0].instance;
   topology_changed = vertices_changed = refitted = false;
   built_with = {test, isa, robust, reference_double};
 }
@@ -183,6 +185,7 @@ bool Accel::Impl::refit(const Options& options) {
       l.sah_now = l.triangle_engine->refit({triangles.data(), triangle_ids.data(), n, l.excluded.data()},
                                            index_of.empty() ? nullptr : index_of.data());
   if (!(sah_now() <= kRefitRebuildGrowth * built_sah())) return false;
+  compute_bounds();
   vertices_changed = false;
   refitted = true;
   return true;
@@ -198,6 +201,8 @@ AccelInfo Accel::Impl::info() const {
   info.geometries = geometries.size();
   info.disabled = disabled;
   info.layers = layers.size();
+  info.instances = instances.size();
+  for (const Instance& in : instances) info.instanced_triangles += in.prototype->triangle_count();
   info.refitted = refitted;
   info.sah_growth = built_sah() > 0.0 ? sah_now() / built_sah() : 1.0;
   info.test = test;

@@ -37,6 +37,15 @@ struct Accel::Impl {
     std::size_t vertex_count = 0;        ///< triangles: the vertices the add call gave
     bool moved = false;                  ///< update_vertices was called on it (a deforming mesh)
     std::uint32_t mask = kMaskAll;       ///< set_geometry_mask
+    bool instance = false;               ///< an instance (add_instance): `index` is its place in `instances`
+  };
+
+  /// One add_instance call: a prototype under an affine transform.
+  struct Instance {
+    std::shared_ptr<const Impl> prototype;
+    float to_world[12];   ///< [A | t] row by row, as given
+    float to_object[12];  ///< its inverse (computed in double)
+    std::uint32_t geometry;
   };
 
   /// The engines over the enabled geometries of one mask.
@@ -48,6 +57,8 @@ struct Accel::Impl {
     std::vector<std::uint32_t> polygon_ids;
     std::vector<unsigned char> excluded;  ///< per triangle: not in this layer's BVH (another layer's, disabled, degenerate)
     core::BvhStats triangle_stats;        ///< of the binary triangle BVH, as built (unit costs)
+    std::vector<std::uint32_t> instances; ///< the layer's instances (places in Impl::instances)
+    core::Bvh instance_bvh;               ///< over their world boxes
     double built_sah = 0.0;               ///< triangle SAH cost at the last build
     double sah_now = 0.0;                 ///< the same now (after refits)
   };
@@ -58,6 +69,7 @@ struct Accel::Impl {
   std::vector<core::Polygon> polygons;
   std::vector<std::uint32_t> polygon_ids;
   std::vector<Geometry> geometries;  ///< by geometry id
+  std::vector<Instance> instances;
   std::uint32_t next_id = 0;
 
   // Committed state.
@@ -76,6 +88,8 @@ struct Accel::Impl {
   Options built_with;             ///< the options of the last build (isa resolved)
   std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
   bool refitted = false;          ///< the last commit refitted
+  core::BBox bounds;              ///< of every vertex added (a conservative box for the instances of this Accel)
+  bool has_instances = false;     ///< some layer holds instances (the queries then walk them after the rest)
   std::vector<Layer> layers;      ///< by descending mask; none when nothing can be hit
   /// A loaded Accel's triangle input, still in the mapped file (Accel::load): unpack() copies
   /// it into the vectors above before anything reads them (a query does not).
@@ -136,6 +150,15 @@ struct Accel::Impl {
   /// SAH costs summed over the layers: at the last build and now.
   double built_sah() const;
   double sah_now() const;
+
+  /// Sets `bounds` from the input as it is (all vertices: conservative).
+  void compute_bounds();
+  /// Builds each layer's instance BVH (accel_instances.cpp).
+  void build_instances();
+  /// The nearest hit through the layers' instances at t < hit.t (tmin as the ray's):
+  /// overwrites `hit` (complete: inst, geom, prim) and returns true when there is one.
+  bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const;
+  bool occluded_instances(const Ray& ray, std::uint32_t mask) const;
 
   // Queries (accel_query.cpp, stream.cpp): rays see the layers whose mask shares a bit with
   // `mask` (kMaskAll for the queries without a mask); mask 0 sees nothing.

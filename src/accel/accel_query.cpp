@@ -48,22 +48,28 @@ std::uint32_t Accel::Impl::lanes_of(std::uint32_t active, const std::uint32_t* m
 
 Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
   Hit hit;
-  for (const Layer& l : layers) {
-    if (!(l.mask & mask)) continue;
-    if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
-    if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+  if (wide_only && (layers[0].mask & mask)) {  // a prototype's usual case (and one call less)
+    wide_only->intersect(ray, hit);
+  } else {
+    for (const Layer& l : layers) {
+      if (!(l.mask & mask)) continue;
+      if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
+      if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+    }
   }
   attribute(hit.prim, hit.geom);
+  if (has_instances) intersect_instances(ray, mask, hit);
   return hit;
 }
 
 bool Accel::Impl::occluded(const Ray& ray, std::uint32_t mask) const {
+  if (wide_only) return (layers[0].mask & mask) && wide_only->occluded(ray);
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
     if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
       return true;
   }
-  return false;
+  return has_instances && occluded_instances(ray, mask);
 }
 
 template <int K>
@@ -95,6 +101,13 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const 
     if (std::memcmp(&before[i], &hits.t[i], 4) == 0) continue;
     attribute(hits.prim[i], hits.geom[i]);
     hits.inst[i] = kInvalidId;
+  }
+  if (!has_instances) return;
+  // Instances lane by lane, bounded by what the lane has found.
+  for (std::uint32_t b = active; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    Hit hit = hit_of(hits, i);
+    if (intersect_instances(accel::lane_ray(rays, i), masks ? masks[i] : kMaskAll, hit)) set_hit(hits, i, hit);
   }
 }
 
@@ -140,7 +153,7 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
   };
   if constexpr (K == 16) {
     if (!masks && wide_only && all_lanes_active(rays)) return wide_only->occluded(rays);
-    if (!masks && layers.size() == 1 && all_lanes_active(rays)) return trace(layers[0], rays);
+    if (!masks && layers.size() == 1 && !has_instances && all_lanes_active(rays)) return trace(layers[0], rays);
   }
   const std::uint32_t active = rays.active & lane_bits(K);
   std::uint32_t blocked = 0;
@@ -151,6 +164,11 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
     widen(rays, lanes, p);
     blocked |= trace(l, p);
   }
+  if (has_instances)
+    for (std::uint32_t b = active & ~blocked; b != 0; b &= b - 1) {
+      const int i = __builtin_ctz(b);
+      if (occluded_instances(accel::lane_ray(rays, i), masks ? masks[i] : kMaskAll)) blocked |= 1u << i;
+    }
   return blocked;
 }
 

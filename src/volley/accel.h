@@ -37,6 +37,8 @@ struct AccelInfo {
   std::size_t polygons = 0;        ///< planar polygons added
   std::size_t geometries = 0;      ///< geometries (one per add_triangles / add_polygon call)
   std::size_t disabled = 0;        ///< geometries disabled at the commit (left out of the structure)
+  std::size_t instances = 0;       ///< instance geometries (add_instance)
+  std::size_t instanced_triangles = 0;  ///< triangles seen through the instances (each prototype's times its instances)
   std::size_t layers = 0;          ///< BVHs, one per distinct geometry mask (1 when no mask was set; 0: nothing to hit);
                                    ///< with several, nodes / leaves / blocks / bytes are summed and the costs are the largest's
   bool loaded = false;             ///< the structure was mapped from a file (Accel::load), not built here
@@ -91,6 +93,20 @@ class VOLLEY_API Accel {
   /// prim = 0). Throws Error when it is not planar within 1e-4 of its size, has a
   /// non-finite vertex or zero area.
   std::uint32_t add_polygon(const float* xyz, std::size_t vertex_count);
+
+  /// Places a committed Accel (the prototype) in this one under an affine transform, as a
+  /// new geometry (as Embree's instance geometry), and returns its id. `transform` holds
+  /// 12 floats, the 3x4 matrix [A | t] row by row, mapping the prototype's coordinates to
+  /// this Accel's: x' = A x + t. A hit through the instance reports inst = the id returned,
+  /// and geom and prim as in the prototype; t is the distance along the ray as given (the
+  /// ray is carried into the prototype's space, not normalised). Instances share the
+  /// prototype's structure (its memory is not copied; it stays alive as long as an
+  /// instance needs it); commit this Accel again after committing a changed prototype.
+  /// One level: a prototype must not hold instances itself. Disable, enable and mask an
+  /// instance like any geometry; update_vertices does not apply. Throws Error when the
+  /// prototype is this Accel, not committed, or holds instances, or when the transform has a
+  /// non-finite entry or is singular.
+  std::uint32_t add_instance(const Accel& prototype, const float* transform);
 
   /// Leaves a geometry out of the structure from the next commit() on (as Embree's
   /// rtcDisableGeometry): nothing of it is hit, and it costs the walks nothing. Its data
@@ -199,7 +215,8 @@ class VOLLEY_API Accel {
 
  private:
   struct Impl;
-  std::unique_ptr<Impl> impl_;
+  /// Shared with the Accels that instance this one (add_instance), which keep it alive.
+  std::shared_ptr<Impl> impl_;
 };
 
 }  // namespace volley

@@ -1,0 +1,168 @@
+// Instances (Accel::add_instance): committed Accels placed under affine transforms. Each
+// layer holds a binary BVH over its instances' world boxes; a ray walks it after the
+// layer's own triangles and polygons, is carried into each instance's object space met on
+// the way and queried against the prototype there, bounded by the nearest hit so far.
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "accel/accel_impl.h"
+#include "core/bvh_traverse.h"
+
+namespace volley {
+namespace {
+
+/// x' = M x + (translation if point): M as 12 floats [A | t] row by row.
+glm::vec3 apply(const float* m, const float* x, bool point) {
+  glm::vec3 out;
+  for (int r = 0; r < 3; ++r)
+    out[r] = m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + (point ? m[4 * r + 3] : 0.0f);
+  return out;
+}
+
+/// The inverse of [A | t] (in double, rounded once), or false when A is singular.
+bool invert(const float* m, float* out) {
+  double a[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) a[r][c] = m[4 * r + c];
+  const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                     a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  if (!(std::fabs(det) > 0.0) || !std::isfinite(det)) return false;
+  double inv[3][3];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      // Cofactor of a[c][r] over det (the adjugate's transpose).
+      const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+      inv[r][c] = (a[r1][c1] * a[r2][c2] - a[r1][c2] * a[r2][c1]) / det;
+    }
+  for (int r = 0; r < 3; ++r) {
+    double t = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      out[4 * r + c] = static_cast<float>(inv[r][c]);
+      t -= inv[r][c] * m[4 * c + 3];
+    }
+    out[4 * r + 3] = static_cast<float>(t);
+  }
+  for (int k = 0; k < 12; ++k)
+    if (!std::isfinite(out[k])) return false;
+  return true;
+}
+
+/// The world box of an instance: its prototype's box with every corner transformed.
+core::BBox world_box(const core::BBox& b, const float* to_world) {
+  core::BBox out;
+  if (!(b.lo.x <= b.hi.x)) return out;
+  for (int corner = 0; corner < 8; ++corner) {
+    const float p[3] = {corner & 1 ? b.hi.x : b.lo.x, corner & 2 ? b.hi.y : b.lo.y, corner & 4 ? b.hi.z : b.lo.z};
+    out.extend(apply(to_world, p, true));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform) {
+  if (!transform) throw Error("add_instance: transform is null (12 floats expected)");
+  const std::shared_ptr<Impl>& proto = prototype.impl_;
+  if (!proto) throw Error("add_instance: the prototype was moved from");
+  if (proto == impl_) throw Error("add_instance: an Accel cannot instance itself");
+  if (!proto->committed) throw Error("add_instance: commit the prototype first");
+  if (!proto->instances.empty())
+    throw Error("add_instance: the prototype holds instances itself (instances are one level deep)");
+  for (int k = 0; k < 12; ++k)
+    if (!std::isfinite(transform[k]))
+      throw Error("add_instance: transform entry " + std::to_string(k) + " (row " + std::to_string(k / 4) +
+                  ", column " + std::to_string(k % 4) + ") is not finite");
+  Impl::Instance instance;
+  std::memcpy(instance.to_world, transform, sizeof instance.to_world);
+  if (!invert(transform, instance.to_object))
+    throw Error("add_instance: the transform's 3x3 part is singular (it has no inverse)");
+  instance.prototype = proto;
+  const std::uint32_t id = impl_->new_geometry(0, false);
+  Impl::Geometry& g = impl_->geometries.back();
+  g.instance = true;
+  g.index = impl_->instances.size();
+  instance.geometry = id;
+  impl_->instances.push_back(std::move(instance));
+  return id;
+}
+
+void Accel::Impl::compute_bounds() {
+  bounds = {};
+  if (packed) {
+    const std::span<const float> v = packed->vertices;
+    for (std::size_t i = 0; i + 2 < v.size(); i += 3) bounds.extend(glm::vec3(v[i], v[i + 1], v[i + 2]));
+  } else {
+    for (const glm::vec3& p : triangles) bounds.extend(p);
+  }
+  for (const core::Polygon& poly : polygons)
+    for (const auto& p : poly.vertices) bounds.extend(p);
+}
+
+void Accel::Impl::build_instances() {
+  has_instances = false;
+  for (Layer& layer : layers) {
+    layer.instances.clear();
+    std::vector<core::BBox> boxes;
+    for (const Geometry& g : geometries) {
+      if (!g.instance || !g.enabled || g.mask != layer.mask) continue;
+      const Instance& in = instances[g.index];
+      layer.instances.push_back(static_cast<std::uint32_t>(g.index));
+      boxes.push_back(world_box(in.prototype->bounds, in.to_world));
+    }
+    layer.instance_bvh = layer.instances.empty() ? core::Bvh{} : core::build_bvh(boxes, core::BvhBuildOptions{});
+    has_instances |= !layer.instances.empty();
+  }
+}
+
+namespace {
+
+/// The ray in an instance's object space: same t (the direction is not normalised).
+Ray to_object(const float* m, const Ray& ray) {
+  const glm::vec3 o = apply(m, ray.org, true), d = apply(m, ray.dir, false);
+  return Ray{{o.x, o.y, o.z}, ray.tmin, {d.x, d.y, d.z}, ray.tmax};
+}
+
+}  // namespace
+
+bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const {
+  bool found = false;
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask) || l.instances.empty()) continue;
+    core::RayT<float> r = accel::to_core(ray);
+    r.tmax = std::min(ray.tmax, hit.t);
+    auto leaf = [&](std::uint32_t k, float& tmax) {
+      const Instance& in = instances[l.instances[k]];
+      Ray local = to_object(in.to_object, ray);
+      local.tmax = tmax;
+      Hit h = in.prototype->intersect(local, mask);
+      if (!h.hit()) return false;
+      tmax = h.t;
+      h.inst = in.geometry;
+      hit = h;
+      found = true;
+      return true;
+    };
+    robust ? core::traverse<false, true>(l.instance_bvh, r, leaf) : core::traverse<false, false>(l.instance_bvh, r, leaf);
+  }
+  return found;
+}
+
+bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask) || l.instances.empty()) continue;
+    auto leaf = [&](std::uint32_t k, float& tmax) {
+      const Instance& in = instances[l.instances[k]];
+      Ray local = to_object(in.to_object, ray);
+      local.tmax = tmax;
+      return in.prototype->occluded(local, mask);
+    };
+    const core::RayT<float> r = accel::to_core(ray);
+    if (robust ? core::traverse<true, true>(l.instance_bvh, r, leaf) : core::traverse<true, false>(l.instance_bvh, r, leaf))
+      return true;
+  }
+  return false;
+}
+
+}  // namespace volley

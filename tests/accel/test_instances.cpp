@@ -1,0 +1,206 @@
+// Instances (Accel::add_instance): an instanced scene answers as the same triangles placed
+// in world space by hand (the oracle: the flattened scene), every query form agrees with
+// the single-ray answers at every ISA, a closed mesh stays watertight through mirrored and
+// scaled instances, instances are disabled and masked like geometries, and bad calls fail.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "accel_test_util.h"
+#include "simd/dispatch.h"
+#include "volley/accel.h"
+
+using volley::Accel;
+using volley::Hit;
+using volley::Isa;
+using volley::kInvalidId;
+using volley::Ray;
+using volley::TriangleTest;
+using accel_test::check_forms;
+using accel_test::report;
+
+namespace {
+
+/// [A | t] row by row: scale s (per axis, negative mirrors), rotation about z by `deg`,
+/// then translation.
+std::vector<float> transform(glm::vec3 s, float deg, glm::vec3 t) {
+  const float c = std::cos(glm::radians(deg)), n = std::sin(glm::radians(deg));
+  return {c * s.x, -n * s.y, 0, t.x, n * s.x, c * s.y, 0, t.y, 0, 0, s.z, t.z};
+}
+
+glm::vec3 apply(const std::vector<float>& m, glm::vec3 p) {
+  return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+          m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+}
+
+std::uint32_t add_soup(Accel& accel, const accel_test::Soup& s) {
+  std::vector<std::uint32_t> idx(3 * s.size());
+  for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
+  return accel.add_triangles(s.xyz.data(), 3 * s.size(), idx.data(), s.size());
+}
+
+const std::vector<std::vector<float>>& placements() {
+  static const std::vector<std::vector<float>> p = {
+      transform({1, 1, 1}, 0, {0, 0, 0}),         transform({0.5f, 0.5f, 0.5f}, 30, {25, 0, 0}),
+      transform({-1, 1, 1}, 0, {0, 25, 0}),       transform({2, 1, 0.5f}, 75, {-30, -10, 5}),
+      transform({1, -1, -1}, 180, {0, -30, -10}), transform({0.25f, 0.25f, 0.25f}, -45, {5, 5, 30})};
+  return p;
+}
+
+/// Rays from all around aimed at points of the placed triangles (centroids and a little
+/// off them), plus some that miss.
+std::vector<Ray> aimed_rays(const accel_test::Soup& soup, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), w(0.1f, 0.8f);
+  std::vector<Ray> rays;
+  for (const std::vector<float>& m : placements())
+    for (int i = 0; i < 120; ++i) {
+      const std::size_t t = rng() % soup.size();
+      const float a = w(rng), b = w(rng) * (1 - a);
+      const glm::vec3 target =
+          apply(m, (1 - a - b) * soup.vertex(t, 0) + a * soup.vertex(t, 1) + b * soup.vertex(t, 2));
+      const glm::vec3 o = target + 60.0f * glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+      const glm::vec3 d = (target - o) * 0.5f;
+      rays.push_back(Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, INFINITY});
+    }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("instances: answers of the flattened scene; every query form; every ISA and test") {
+  const accel_test::Soup soup = accel_test::random_soup(200, 77), other = accel_test::random_soup(100, 78);
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    for (TriangleTest test : accel_test::kTests) {
+      CAPTURE(std::string(volley::to_string(isa)));
+      CAPTURE(std::string(volley::to_string(test)));
+      Accel prototype;
+      add_soup(prototype, soup);
+      prototype.commit({test, isa});
+      // The scene: a geometry of its own (id 0), then the instances (ids 1 ..).
+      Accel scene, flat;
+      add_soup(scene, other);
+      add_soup(flat, other);
+      for (const std::vector<float>& m : placements()) {
+        scene.add_instance(prototype, m.data());
+        accel_test::Soup placed;
+        for (std::size_t t = 0; t < soup.size(); ++t)
+          placed.add(apply(m, soup.vertex(t, 0)), apply(m, soup.vertex(t, 1)), apply(m, soup.vertex(t, 2)));
+        add_soup(flat, placed);
+      }
+      scene.commit({test, isa});
+      flat.commit({test, isa});
+      CHECK(scene.info().instances == placements().size());
+      CHECK(scene.info().instanced_triangles == placements().size() * soup.size());
+
+      const std::vector<Ray> rays = aimed_rays(soup, 5);
+      std::vector<Hit> single(rays.size());
+      int differ = 0, hits = 0, through = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Hit h = single[i] = scene.intersect(rays[i]);
+        const Hit f = flat.intersect(rays[i]);
+        hits += h.hit();
+        // The same triangle: an instance hit names it by instance, geometry 0, prim; the
+        // flattened scene by geometry 1 + instance order.
+        const bool via = h.inst != kInvalidId;
+        through += via;
+        const std::uint32_t geom = via ? h.inst : h.geom;
+        const bool same = h.hit() == f.hit() && (!h.hit() || (geom == f.geom && h.prim == f.prim &&
+                                                              std::fabs(h.t - f.t) <= 1e-4f * f.t));
+        if (via) CHECK(h.geom == 0);
+        differ += !same;
+      }
+      CHECK(hits > int(rays.size()) * 3 / 4);
+      CHECK(through > int(rays.size()) / 2);
+      CHECK(differ <= int(rays.size()) / 200);  // near-ties between triangles may go either way
+      report(check_forms(scene, rays, single, 11), "instanced scene: forms against single rays");
+    }
+  }
+}
+
+TEST_CASE("instances: a closed mesh stays watertight through mirrored and scaled instances") {
+  // An octahedron: rays from inside toward its vertices and edge midpoints must all hit.
+  const float v[] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+  const std::uint32_t idx[] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  for (Isa isa : {Isa::scalar, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel oct;
+    oct.add_triangles(v, 6, idx, 8);
+    oct.commit({TriangleTest::watertight, isa});
+    const std::vector<std::vector<float>> ts = {transform({-1, 1, 1}, 0, {3, 0, 0}),
+                                                transform({1e3f, 1e-3f, 1}, 33, {-1e4f, 7, 2}),
+                                                transform({-0.01f, -0.01f, 0.01f}, 111, {0.5f, 1e5f, -3})};
+    for (const std::vector<float>& m : ts) {
+      Accel scene;
+      scene.add_instance(oct, m.data());
+      scene.commit({TriangleTest::watertight, isa});
+      const glm::vec3 center = apply(m, {0, 0, 0});
+      int misses = 0, rays = 0;
+      for (int a = 0; a < 6; ++a)
+        for (int b = a; b < 6; ++b) {
+          const glm::vec3 pa(v[3 * a], v[3 * a + 1], v[3 * a + 2]), pb(v[3 * b], v[3 * b + 1], v[3 * b + 2]);
+          if (a != b && glm::dot(pa, pb) < -0.5f) continue;  // opposite vertices: no edge
+          const glm::vec3 target = apply(m, 0.5f * (pa + pb)), d = target - center;
+          ++rays;
+          misses += !scene.intersect(Ray{{center.x, center.y, center.z}, 0, {d.x, d.y, d.z}, INFINITY}).hit();
+        }
+      CHECK(rays == 18);
+      CHECK(misses == 0);
+    }
+  }
+}
+
+TEST_CASE("instances: disabled, masked, shared, and bad calls") {
+  const accel_test::Soup soup = accel_test::random_soup(50, 3);
+  const Isa isa = volley::simd::cpu_has(Isa::avx2) ? Isa::avx2 : Isa::sse42;
+  Accel scene;
+  std::uint32_t a = 0, b = 0;
+  const std::vector<float> left = transform({1, 1, 1}, 0, {-40, 0, 0}), right = transform({1, 1, 1}, 0, {40, 0, 0});
+  {
+    Accel prototype;
+    add_soup(prototype, soup);
+    CHECK_THROWS_WITH_AS(scene.add_instance(prototype, left.data()), doctest::Contains("commit the prototype"),
+                         volley::Error);
+    prototype.commit({TriangleTest::watertight, isa});
+    a = scene.add_instance(prototype, left.data());
+    b = scene.add_instance(prototype, right.data());
+    // The prototype goes out of scope here: the instances keep its structure alive.
+  }
+  scene.commit({TriangleTest::watertight, isa});
+  const glm::vec3 c = soup.vertex(0, 0) * (1.0f / 3) + soup.vertex(0, 1) * (1.0f / 3) + soup.vertex(0, 2) * (1.0f / 3);
+  const Ray to_a{{c.x - 40, c.y, 50}, 0, {0, 0, -1}, INFINITY}, to_b{{c.x + 40, c.y, 50}, 0, {0, 0, -1}, INFINITY};
+  REQUIRE(scene.intersect(to_a).hit());
+  CHECK(scene.intersect(to_a).inst == a);
+  CHECK(scene.intersect(to_b).inst == b);
+  CHECK(scene.info().bytes < 2000);  // the instance BVH only: the prototype is shared
+  scene.disable_geometry(a);
+  scene.set_geometry_mask(b, 0x4);
+  scene.commit({TriangleTest::watertight, isa});
+  CHECK(!scene.intersect(to_a).hit());
+  CHECK(scene.intersect(to_b, 0x4).inst == b);
+  CHECK(!scene.intersect(to_b, 0x2).hit());
+  CHECK(!scene.occluded(to_b, 0x2));
+  CHECK(scene.occluded(to_b, 0x6));
+
+  const float nan = std::nanf("");
+  const std::vector<float> singular = transform({1, 0, 1}, 0, {0, 0, 0});
+  std::vector<float> bad = left;
+  bad[7] = nan;
+  Accel proto2;
+  add_soup(proto2, soup);
+  proto2.commit();
+  Accel other;
+  CHECK_THROWS_WITH_AS(other.add_instance(proto2, singular.data()), doctest::Contains("singular"), volley::Error);
+  CHECK_THROWS_WITH_AS(other.add_instance(proto2, bad.data()), doctest::Contains("entry 7"), volley::Error);
+  CHECK_THROWS_WITH_AS(other.add_instance(proto2, nullptr), doctest::Contains("null"), volley::Error);
+  CHECK_THROWS_WITH_AS(proto2.add_instance(proto2, left.data()), doctest::Contains("itself"), volley::Error);
+  CHECK_THROWS_WITH_AS(other.add_instance(scene, left.data()), doctest::Contains("one level"), volley::Error);
+  CHECK_THROWS_WITH_AS(scene.update_vertices(b, soup.xyz.data(), 3), doctest::Contains("an instance"), volley::Error);
+  CHECK_THROWS_WITH_AS(scene.save("/tmp/volley_instances.vacc"), doctest::Contains("instances"), volley::Error);
+}
