@@ -230,6 +230,10 @@ AccelInfo Accel::Impl::info() const {
     }
     info.nodes = nodes, info.leaves = leaves, info.bytes = bytes, info.blocks = blocks, info.depth = depth;
   }
+  // Instances: their records and BVHs (the prototypes' structures are theirs, shared).
+  info.bytes += instances.size() * (sizeof(Instance) + sizeof(Geometry));
+  for (const Layer& l : layers)
+    info.bytes += l.instance_bvh.nodes.size() * sizeof(core::BvhNode) + l.instance_bvh.prim_index.size() * 4;
   return info;
 }
 

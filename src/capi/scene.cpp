@@ -198,6 +198,21 @@ volley_status volley_scene_add_polygon(volley_scene* scene, const float* xyz, si
   });
 }
 
+volley_status volley_scene_add_instance(volley_scene* scene, const volley_scene* prototype, const float* transform,
+                                        uint32_t* geometry) {
+  return guarded("volley_scene_add_instance", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
+    require_pointer(scene, "scene");
+    require_pointer(prototype, "prototype");
+    require_pointer(transform, "transform");
+    if (prototype == scene) fail(VOLLEY_ERROR_INVALID_ARGUMENT, "a scene cannot instance itself");
+    if (!prototype->committed) fail(VOLLEY_ERROR_NOT_COMMITTED, "commit the prototype first");
+    // Accel checks the rest (itself, nested, non-finite or singular: volley::Error) before it adds anything.
+    const std::uint32_t id = scene->accel.add_instance(prototype->accel, transform);
+    scene->committed = false;
+    if (geometry) *geometry = id;
+  });
+}
+
 volley_status volley_scene_disable_geometry(volley_scene* scene, uint32_t geometry) {
   // (Accel's Error for an unknown id is an argument error here.)
   return guarded("volley_scene_disable_geometry", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {
@@ -282,6 +297,8 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.sah_growth = a.sah_growth;
     out.loaded = a.loaded ? 1 : 0;
     out.layers = a.layers;
+    out.instances = a.instances;
+    out.instanced_triangles = a.instanced_triangles;
     out.load_seconds = a.load_seconds;
     *info = out;
   });

@@ -30,7 +30,10 @@ Runner register_info(CLI::App& app) {
     std::printf("geometry    %zu triangles (%zu degenerate), %zu polygons, %zu vertices\n", info.triangles,
                 info.degenerate, info.polygons, desc.mesh.positions.size());
     std::printf("geometries  %zu (%zu objects of triangles, %zu polygons; each hit names its geometry)\n",
-                info.geometries, info.geometries - info.polygons, info.polygons);
+                info.geometries, info.geometries - info.polygons - info.instances, info.polygons);
+    if (info.instances > 0)
+      std::printf("instances   %zu (%zu triangles through them; sharing their prototypes' structures)\n",
+                  info.instances, info.instanced_triangles);
     if (info.layers > 1)
       std::printf("masks       %zu distinct object masks: one BVH each (a ray walks those its mask shares a bit with)\n",
                   info.layers);

@@ -83,6 +83,15 @@ struct RenderSettings {
   std::uint64_t seed = 1;
 };
 
+/// An "instance" object: a triangle object placed again under a transform (the renderer
+/// builds the object alone as a prototype and adds it to the scene with Accel::add_instance).
+struct InstanceDesc {
+  std::string name;
+  std::size_t object = 0;           ///< index in MeshDesc::objects of the object it places ("of")
+  glm::mat4 transform{1.0f};
+  std::uint32_t mask = 0xffffffffu;
+};
+
 struct SceneDesc {
   std::string source;      ///< file it came from (for messages)
   bool has_camera = false; ///< false: the renderer frames the bounds automatically
@@ -92,6 +101,7 @@ struct SceneDesc {
   std::vector<PointLight> lights;
   MeshDesc mesh;
   std::vector<PolygonDesc> polygons;
+  std::vector<InstanceDesc> instances;
 };
 
 }  // namespace volley::io

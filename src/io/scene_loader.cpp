@@ -305,7 +305,7 @@ void read_objects(const Json& j, const JsonPath& at, Context& ctx) {
     const Json& obj = j[i];
     const JsonPath oat = at[i];
     if (!obj.is_object()) oat.fail("expected an object, found " + describe(obj));
-    if (!obj.contains("type")) oat.fail("missing key \"type\" (mesh, triangles or polygon)");
+    if (!obj.contains("type")) oat.fail("missing key \"type\" (mesh, triangles, polygon or instance)");
     const std::string& type = get_string(obj["type"], oat["type"]);
     if (type == "mesh") {
       check_object(obj, oat, {"type", "name", "file", "material", "transform", "mask"});
@@ -313,8 +313,10 @@ void read_objects(const Json& j, const JsonPath& at, Context& ctx) {
       check_object(obj, oat, {"type", "name", "vertices", "indices", "material", "transform", "mask"});
     } else if (type == "polygon") {
       check_object(obj, oat, {"type", "name", "vertices", "material", "transform", "mask"});
+    } else if (type == "instance") {
+      check_object(obj, oat, {"type", "name", "of", "transform", "mask"});
     } else {
-      oat["type"].fail("unknown object type \"" + type + "\" (expected mesh, triangles or polygon)");
+      oat["type"].fail("unknown object type \"" + type + "\" (expected mesh, triangles, polygon or instance)");
     }
     if (obj.contains("name")) get_string(obj["name"], oat["name"]);
     const std::uint32_t mask =
@@ -322,6 +324,18 @@ void read_objects(const Json& j, const JsonPath& at, Context& ctx) {
     const glm::mat4 transform =
         obj.contains("transform") ? read_transform(obj["transform"], oat["transform"]) : glm::mat4(1.0f);
     MeshDesc& mesh = ctx.scene.mesh;
+    if (type == "instance") {
+      if (!obj.contains("of")) oat.fail("missing key \"of\" (the name of a mesh or triangles object above)");
+      const std::string& of = get_string(obj["of"], oat["of"]);
+      const auto it = std::find_if(mesh.objects.begin(), mesh.objects.end(),
+                                   [&](const ObjectDesc& o) { return o.name == of; });
+      if (it == mesh.objects.end())
+        oat["of"].fail("no mesh or triangles object named \"" + of + "\" above this one (an instance places an "
+                       "object defined before it, by its \"name\")");
+      ctx.scene.instances.push_back({obj.contains("name") ? obj["name"].get<std::string>() : oat.str(),
+                                     static_cast<std::size_t>(it - mesh.objects.begin()), transform, mask});
+      continue;
+    }
     const std::size_t first = mesh.triangle_count();
     if (type == "mesh") read_mesh(obj, oat, transform, ctx);
     if (type == "triangles") read_triangles(obj, oat, transform, ctx);

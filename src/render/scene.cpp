@@ -1,5 +1,6 @@
 #include "render/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -18,11 +19,28 @@ struct Bounds {
   }
 };
 
+Bounds object_bounds(const io::MeshDesc& mesh, const io::ObjectDesc& o) {
+  Bounds b;
+  for (std::size_t k = 3 * o.first_triangle; k < 3 * (o.first_triangle + o.triangle_count); ++k)
+    b.extend(mesh.positions[mesh.indices[k]]);
+  return b;
+}
+
 Bounds scene_bounds(const io::SceneDesc& desc) {
   Bounds b;
   for (const auto& p : desc.mesh.positions) b.extend(p);
   for (const auto& poly : desc.polygons)
     for (const auto& p : poly.vertices) b.extend(p);
+  std::vector<Bounds> objects(desc.mesh.objects.size());
+  std::vector<bool> known(desc.mesh.objects.size(), false);
+  for (const io::InstanceDesc& in : desc.instances) {
+    if (!known[in.object]) objects[in.object] = object_bounds(desc.mesh, desc.mesh.objects[in.object]), known[in.object] = true;
+    const Bounds& o = objects[in.object];
+    if (!(o.lo.x <= o.hi.x)) continue;
+    for (int c = 0; c < 8; ++c)
+      b.extend(glm::vec3(in.transform * glm::vec4(c & 1 ? o.hi.x : o.lo.x, c & 2 ? o.hi.y : o.lo.y,
+                                                   c & 4 ? o.hi.z : o.lo.z, 1.0f)));
+  }
   return b;
 }
 
@@ -102,6 +120,7 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     centroid /= double(v.size());
     polygons_.push_back({unit, float(glm::dot(glm::dvec3(unit), centroid)), poly.material});
   }
+  add_instances(desc, options);
   if (load) {
     accel_ = Accel::load(structure);
     const AccelInfo info = accel_.info();
@@ -126,6 +145,39 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
   }
 }
 
+void Scene::add_instances(const io::SceneDesc& desc, const Options& options) {
+  // One prototype per object placed (built alone, as the object's own geometry 0: a hit
+  // through it names prim = the triangle within the object).
+  std::vector<std::int64_t> prototype_of(desc.mesh.objects.size(), -1);
+  for (const io::InstanceDesc& in : desc.instances) {
+    if (prototype_of[in.object] >= 0) continue;
+    const io::ObjectDesc& o = desc.mesh.objects[in.object];
+    Accel proto;
+    proto.add_triangles(&positions_[0].x, positions_.size(), indices_.data() + 3 * o.first_triangle, o.triangle_count);
+    proto.commit(options);
+    prototype_of[in.object] = static_cast<std::int64_t>(prototypes_.size());
+    prototypes_.push_back(std::move(proto));
+  }
+  for (const io::InstanceDesc& in : desc.instances) {
+    const glm::mat4& m = in.transform;
+    const float rows[12] = {m[0][0], m[1][0], m[2][0], m[3][0], m[0][1], m[1][1],
+                            m[2][1], m[3][1], m[0][2], m[1][2], m[2][2], m[3][2]};
+    std::uint32_t id;
+    try {
+      id = accel_.add_instance(prototypes_[static_cast<std::size_t>(prototype_of[in.object])], rows);
+    } catch (const Error& e) {
+      throw Error("instance '" + in.name + "': " + e.what());
+    }
+    if (in.mask != kMaskAll) accel_.set_geometry_mask(id, in.mask);
+    if (geometry_base_.size() <= id) geometry_base_.resize(id + 1, 0);
+    geometry_base_[id] = static_cast<std::uint32_t>(desc.mesh.objects[in.object].first_triangle);
+    if (instance_slot_.size() <= id) instance_slot_.resize(id + 1, 0);
+    instance_slot_[id] = static_cast<std::uint32_t>(instances_.size());
+    const float t = std::max({std::abs(m[3][0]), std::abs(m[3][1]), std::abs(m[3][2])});
+    instances_.push_back({m, glm::transpose(glm::inverse(glm::mat3(m))), t});
+  }
+}
+
 template <bool Smooth>
 SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
   SurfacePoint s;
@@ -133,14 +185,19 @@ SurfacePoint Scene::surface_as(const Ray& ray, const Hit& hit) const {
   const std::size_t tri_count = indices_.size() / 3;
   const std::uint32_t prim = prim_index(hit);
   if (prim < tri_count) {
-    const std::uint32_t* idx = &indices_[3 * prim];
-    const glm::vec3 &p0 = positions_[idx[0]], &p1 = positions_[idx[1]], &p2 = positions_[idx[2]];
+    glm::vec3 p0, p1, p2;
+    triangle_vertices(hit, p0, p1, p2);
     s.p = hit_point(p0, p1, p2, hit.u, hit.v, s.p_error);
+    const InstanceShading* instance = hit.inst != kInvalidId ? &instances_[instance_slot_[hit.inst]] : nullptr;
+    // Through an instance the ray was carried into the object's space and the vertices
+    // out of it, each rounded: widen the bound by that rounding.
+    if (instance) s.p_error += core::rounding_gamma(16) * (glm::abs(s.p) + glm::vec3(instance->translation));
     s.ng = glm::normalize(glm::cross(p1 - p0, p2 - p0));
     if (Smooth && !corner_normals_.empty()) {
       const glm::vec3* n = &corner_normals_[3 * prim];
       const float b0 = 1.0f - hit.u - hit.v;
       s.ns = b0 * n[0] + hit.u * n[1] + hit.v * n[2];
+      if (instance) s.ns = instance->normal * s.ns;
       const float len = glm::length(s.ns);
       s.ns = len > 0.0f ? s.ns / len : s.ng;
     } else {

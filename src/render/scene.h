@@ -55,7 +55,18 @@ class Scene {
   const Accel& accel() const { return accel_; }
   /// A hit's primitive in the merged numbering of positions() / indices() (triangles
   /// first, then polygons): the Accel reports the geometry and the index within it.
-  std::uint32_t prim_index(const Hit& hit) const { return geometry_base_[hit.geom] + hit.prim; }
+  /// A hit through an instance is numbered as the triangle of the object it places.
+  std::uint32_t prim_index(const Hit& hit) const {
+    return geometry_base_[hit.inst != kInvalidId ? hit.inst : hit.geom] + hit.prim;
+  }
+  /// The world-space vertices of a triangle hit (moved by its instance's transform, if any).
+  void triangle_vertices(const Hit& hit, glm::vec3& p0, glm::vec3& p1, glm::vec3& p2) const {
+    const std::uint32_t* idx = &indices_[3 * std::size_t(prim_index(hit))];
+    p0 = positions_[idx[0]], p1 = positions_[idx[1]], p2 = positions_[idx[2]];
+    if (hit.inst == kInvalidId) return;
+    const glm::mat4& m = instances_[instance_slot_[hit.inst]].to_world;
+    p0 = glm::vec3(m * glm::vec4(p0, 1.0f)), p1 = glm::vec3(m * glm::vec4(p1, 1.0f)), p2 = glm::vec3(m * glm::vec4(p2, 1.0f));
+  }
   const core::Camera& camera() const { return camera_; }
   const std::vector<io::Material>& materials() const { return materials_; }
   const std::vector<io::PointLight>& lights() const { return lights_; }
@@ -98,6 +109,17 @@ class Scene {
     std::uint32_t material;
   };
   std::vector<PolygonShading> polygons_;
+  /// The scene's "instance" objects: the prototypes (one Accel per object placed) and,
+  /// per instance, its transform; instance_slot_ maps a geometry id to its entry.
+  struct InstanceShading {
+    glm::mat4 to_world;
+    glm::mat3 normal;      ///< inverse transpose of the 3x3 part
+    float translation;     ///< largest |translation| (for the hit point's error bound)
+  };
+  std::vector<Accel> prototypes_;
+  std::vector<InstanceShading> instances_;
+  std::vector<std::uint32_t> instance_slot_;
+  void add_instances(const io::SceneDesc& desc, const Options& options);
 };
 
 /// scene.features() with the closed-and-opaque analysis filled in (closed, open_edges) from

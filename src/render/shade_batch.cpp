@@ -83,14 +83,15 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
     }
     return;
   }
-  // Gather the triangle hits into lanes; misses and polygon hits stay out.
+  // Gather the triangle hits into lanes; misses, polygon hits and hits through instances
+  // (their vertices and error bound are transformed: Scene::surface_as) stay out.
   const std::size_t stride = (n + kRowAlign - 1) / kRowAlign * kRowAlign;
   float* rows = aligned_floats(surface_buffer, kSurfaceRows * stride);
   lane_of.resize(n);
   std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Hit& h = hits[i];
-    if (!h.hit() || scene.prim_index(h) >= triangles) {
+    if (!h.hit() || scene.prim_index(h) >= triangles || h.inst != kInvalidId) {
       lane_of[i] = kNotInLanes;
       continue;
     }

@@ -195,6 +195,8 @@ typedef struct volley_scene_info {
   double sah_growth;         /**< SAH cost of the triangle BVH now / at the last full build */
   int loaded;                /**< nonzero: the structure was mapped from a file (volley_scene_load), not built */
   size_t layers;             /**< BVHs, one per distinct geometry mask (volley::AccelInfo::layers) */
+  size_t instances;          /**< instance geometries (volley_scene_add_instance) */
+  size_t instanced_triangles; /**< triangles seen through the instances */
   double load_seconds;       /**< wall time of volley_scene_load (0 when built) */
 } volley_scene_info;
 
@@ -271,6 +273,20 @@ VOLLEY_API volley_status volley_scene_update_vertices(volley_scene* scene, uint3
  *  enabled one, but the scene must still be committed again).
  *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene or an id no add call returned. */
 VOLLEY_API volley_status volley_scene_enable_geometry(volley_scene* scene, uint32_t geometry);
+
+/** Places the committed scene `prototype` in `scene` under an affine transform as a new
+ *  geometry (volley::Accel::add_instance; Embree's instance geometry): transform holds 12
+ *  floats, the 3x4 matrix [A | t] row by row (x' = A x + t). Hits through it report
+ *  inst = its id (stored in *geometry when not NULL) and geom, prim as in the prototype.
+ *  The prototype's structure is shared, not copied, and stays alive while an instance
+ *  needs it (volley_scene_destroy of the prototype is allowed); commit `scene` again
+ *  after changing and committing the prototype. One level: a prototype holding instances
+ *  is refused. The scene must be committed again before the next query.
+ *  Errors: VOLLEY_ERROR_INVALID_ARGUMENT for a NULL scene, prototype or transform, the
+ *  scene itself as prototype, a prototype with instances, a non-finite or singular
+ *  transform; VOLLEY_ERROR_NOT_COMMITTED when the prototype is not committed. */
+VOLLEY_API volley_status volley_scene_add_instance(volley_scene* scene, const volley_scene* prototype,
+                                                   const float* transform, uint32_t* geometry);
 
 /** Sets a geometry's 32-bit mask (volley::Accel::set_geometry_mask; default
  *  VOLLEY_MASK_ALL): the masked queries see it only when their mask shares a bit with it.

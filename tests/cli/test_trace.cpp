@@ -360,3 +360,62 @@ TEST_CASE("trace --mask: rays see the objects whose \"mask\" shares a bit with t
   CHECK(r.status != 0);
   CHECK(has(r.output, "mask"));
 }
+
+TEST_CASE("instance objects: the same hits as the object placed by hand; bad \"of\" names the problem") {
+  // A square of two triangles, hidden itself (mask 0), placed twice; and the same two
+  // placements written out as plain objects.
+  const std::string square = R"("vertices": [[-1,-1,0],[1,-1,0],[1,1,0],[-1,1,0]], "indices": [[0,1,2],[0,2,3]])";
+  const std::string place1 = R"({"translate": [0.5, 0, -1]})";
+  const std::string place2 = R"({"scale": [-2, 1, 1], "rotate": {"axis": [0, 0, 1], "degrees": 30}, "translate": [0, 0.5, -3]})";
+  const std::string camera = R"("camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0], "fov": 60})";
+  const fs::path instanced = temp_file("instanced.json", "{" + camera + R"(, "objects": [
+      {"type": "triangles", "name": "sq", "mask": 0, )" + square + R"(},
+      {"type": "instance", "of": "sq", "transform": )" + place1 + R"(},
+      {"type": "instance", "of": "sq", "transform": )" + place2 + "}]}");
+  const fs::path flat = temp_file("flat.json", "{" + camera + R"(, "objects": [
+      {"type": "triangles", "name": "sq", "mask": 0, )" + square + R"(},
+      {"type": "triangles", "transform": )" + place1 + ", " + square + R"(},
+      {"type": "triangles", "transform": )" + place2 + ", " + square + "}]}");
+  const fs::path rays = temp_path("instanced.vray");
+  REQUIRE(run("rays " + flat.string() + " --workload primary --width 48 --height 48 -o " + rays.string()).status == 0);
+  const fs::path a = temp_path("instanced.vhit"), b = temp_path("flat.vhit");
+  for (const std::string mode : {"single", "packet", "stream"}) {
+    CAPTURE(mode);
+    REQUIRE(run("trace " + instanced.string() + " --rays " + rays.string() + " --reps 1 --mode " + mode + " -o " +
+                a.string()).status == 0);
+    REQUIRE(run("trace " + flat.string() + " --rays " + rays.string() + " --reps 1 -o " + b.string()).status == 0);
+    const std::vector<Hit> through = io::read_hits(a), placed = io::read_hits(b);
+    REQUIRE(through.size() == placed.size());
+    std::size_t hits = 0, differ = 0;
+    for (std::size_t i = 0; i < through.size(); ++i) {
+      hits += through[i].hit();
+      differ += through[i].hit() != placed[i].hit() ||
+                (through[i].hit() && (through[i].inst != placed[i].geom || through[i].geom != 0 ||
+                                      std::abs(through[i].t - placed[i].t) > 1e-5f * placed[i].t));
+    }
+    CHECK(hits > through.size() / 10);
+    CHECK(differ == 0);
+  }
+  const Run info = run("info " + instanced.string());
+  CHECK(has(info.output, "instances   2 (4 triangles through them"));
+  // A render through instances works (shading reads the instance's transform).
+  CHECK(run("render " + instanced.string() + " --width 32 --height 32 -o " + temp_path("instanced.png").string())
+            .status == 0);
+
+  const fs::path bad = temp_file("badof.json", R"({"objects": [
+      {"type": "polygon", "name": "p", "vertices": [[0,0,0],[1,0,0],[0,1,0]]},
+      {"type": "instance", "of": "p"}]})");
+  Run r = run("info " + bad.string());
+  CHECK(r.status != 0);
+  CHECK(r.status < 128);
+  CHECK(has(r.output, "objects[1].of: no mesh or triangles object named \"p\""));
+  const fs::path singular = temp_file("singular.json", R"({"objects": [
+      {"type": "triangles", "name": "t", "vertices": [[0,0,0],[1,0,0],[0,1,0]]},
+      {"type": "instance", "of": "t", "transform": {"scale": [1, 1, 0]}}]})");
+  r = run("info " + singular.string());
+  CHECK(r.status != 0);
+  const fs::path saved = temp_path("instanced.vacc");
+  r = run("trace " + instanced.string() + " --rays " + rays.string() + " --reps 1 --save " + saved.string());
+  CHECK(r.status != 0);
+  CHECK(has(r.output, "instances, which are not saved"));
+}

@@ -454,6 +454,45 @@ static void check_masks(void) {
   volley_scene_destroy(scene);
 }
 
+/* Instances: the scene (floor, table, polygon) placed twice, 10 lower, and mirrored in x
+ * about 5 and 20 lower; rays from above hit them with inst set, 10 and 20 further. */
+static void check_instances(void) {
+  static const float down[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -10};
+  static const float mirrored[12] = {-1, 0, 0, 10, 0, 1, 0, 0, 0, 0, 1, -20};
+  static const float singular[12] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0};
+  volley_scene* prototype = make_scene();
+  volley_scene* world = NULL;
+  volley_ray r = scene_ray(0);
+  volley_hit h, direct;
+  volley_scene_info info;
+  uint32_t a = 99, b = 99;
+  r.org[0] = 0.5f, r.org[1] = 0.25f; /* over the table */
+  expect(volley_scene_create(&world), VOLLEY_OK, "volley_scene_create");
+  expect(volley_scene_add_instance(world, prototype, down, &a), VOLLEY_ERROR_NOT_COMMITTED, "volley_scene_add_instance");
+  expect(volley_scene_commit(prototype, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
+  expect(volley_intersect1(prototype, &r, &direct), VOLLEY_OK, "volley_intersect1");
+  expect(volley_scene_add_instance(world, prototype, down, &a), VOLLEY_OK, "volley_scene_add_instance");
+  expect(volley_scene_add_instance(world, prototype, mirrored, &b), VOLLEY_OK, "volley_scene_add_instance");
+  check(a == 0 && b == 1, "instance ids", (int)b);
+  expect(volley_scene_add_instance(world, prototype, singular, NULL), VOLLEY_ERROR_INVALID_ARGUMENT,
+         "volley_scene_add_instance");
+  expect(volley_scene_add_instance(world, world, down, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_add_instance");
+  expect(volley_scene_add_instance(world, prototype, NULL, NULL), VOLLEY_ERROR_INVALID_ARGUMENT,
+         "volley_scene_add_instance");
+  volley_scene_destroy(prototype); /* the instances keep its structure */
+  expect(volley_scene_commit(world, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
+  expect(volley_scene_get_info(world, &info), VOLLEY_OK, "volley_scene_get_info");
+  check(info.instances == 2 && info.instanced_triangles == 8, "info: 2 instances of 4 triangles", (int)info.instances);
+  expect(volley_intersect1(world, &r, &h), VOLLEY_OK, "volley_intersect1");
+  check(h.inst == a && h.geom == direct.geom && h.prim == direct.prim && scene_t_close(h.t, direct.t + 10.0f),
+        "the hit through the first instance", (int)h.inst);
+  r.org[0] = 9.5f; /* over the mirrored table (x -> 10 - x), 20 below */
+  expect(volley_intersect1(world, &r, &h), VOLLEY_OK, "volley_intersect1");
+  check(h.inst == b && h.geom == direct.geom && scene_t_close(h.t, direct.t + 20.0f), "the mirrored instance",
+        (int)h.inst);
+  volley_scene_destroy(world);
+}
+
 /* Save and load: a loaded scene answers every ray bit for bit as the saved one, at every
  * ISA this CPU has; it reports itself loaded; bad paths and files fail with
  * VOLLEY_ERROR_FILE and leave *out alone. */
@@ -531,6 +570,7 @@ int main(void) {
   check_refit();
   check_save_load();
   check_masks();
+  check_instances();
   if (failures) {
     printf("consumer_c: %d failures\n", failures);
     return 1;
