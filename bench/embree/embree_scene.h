@@ -18,6 +18,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "volley/ray.h"
 
@@ -40,35 +41,55 @@ inline const char* to_string(RTCBuildQuality q) {
   }
 }
 
-/// An Embree device and a committed scene of one triangle mesh. Not copyable. Queries
+/// A triangle mesh for Embree: 3 * vertex_count floats, 3 * triangle_count indices.
+struct EmbreeMesh {
+  const float* xyz;
+  std::size_t vertex_count;
+  const std::uint32_t* indices;
+  std::size_t triangle_count;
+};
+
+/// A placed copy of a prototype mesh (RTC_GEOMETRY_TYPE_INSTANCE): the 3x4 transform
+/// [A | t] row by row, attached with geometry id `id` (its instID in hits).
+struct EmbreeInstance {
+  std::size_t prototype;
+  float transform[12];
+  unsigned id;
+};
+
+/// An Embree device and a committed scene of one triangle mesh (geometry 0) and any
+/// instances of prototype meshes (each its own committed scene). Not copyable. Queries
 /// through scene() are thread-safe (Embree's rule for committed scenes).
 class EmbreeScene {
  public:
   /// `xyz`: 3 * vertex_count floats; `indices`: 3 * triangle_count vertex indices. The
   /// data is copied into Embree's own buffers. Throws std::runtime_error on an Embree error.
   EmbreeScene(const float* xyz, std::size_t vertex_count, const std::uint32_t* indices,
-              std::size_t triangle_count, const EmbreeConfig& config = {}) {
+              std::size_t triangle_count, const EmbreeConfig& config = {})
+      : EmbreeScene({xyz, vertex_count, indices, triangle_count}, {}, {}, config) {}
+
+  /// The mesh `main` plus instances of `prototypes` (Embree's two-level scene).
+  EmbreeScene(const EmbreeMesh& main, const std::vector<EmbreeMesh>& prototypes,
+              const std::vector<EmbreeInstance>& instances, const EmbreeConfig& config = {}) {
     device_ = rtcNewDevice(config.device_config.empty() ? nullptr : config.device_config.c_str());
     if (!device_) throw std::runtime_error("embree: rtcNewDevice failed (" + error_name(rtcGetDeviceError(nullptr)) + ")");
     rtcSetDeviceErrorFunction(device_, &EmbreeScene::on_error, nullptr);
     const auto start = std::chrono::steady_clock::now();
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneFlags(scene_, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-    rtcSetSceneBuildQuality(scene_, config.quality);
-    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geometry, config.quality);
-    // rtcSetNewGeometryBuffer pads the allocation as Embree's SIMD loads require.
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), vertex_count));
-    auto* t = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                                  RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t),
-                                                                  triangle_count));
-    if (!v || !t) throw std::runtime_error("embree: cannot allocate geometry buffers");
-    for (std::size_t i = 0; i < 3 * vertex_count; ++i) v[i] = xyz[i];
-    for (std::size_t i = 0; i < 3 * triangle_count; ++i) t[i] = indices[i];
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(scene_, geometry, 0);
-    rtcReleaseGeometry(geometry);
+    for (const EmbreeMesh& m : prototypes) {
+      prototypes_.push_back(new_scene(config));
+      attach_mesh(prototypes_.back(), m, config);
+      rtcCommitScene(prototypes_.back());
+    }
+    scene_ = new_scene(config);
+    if (main.triangle_count != 0) attach_mesh(scene_, main, config);
+    for (const EmbreeInstance& in : instances) {
+      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, prototypes_.at(in.prototype));
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, in.transform);
+      rtcCommitGeometry(g);
+      rtcAttachGeometryByID(scene_, g, in.id);
+      rtcReleaseGeometry(g);
+    }
     rtcCommitScene(scene_);
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (const RTCError e = rtcGetDeviceError(device_); e != RTC_ERROR_NONE)
@@ -76,6 +97,7 @@ class EmbreeScene {
   }
   ~EmbreeScene() {
     if (scene_) rtcReleaseScene(scene_);
+    for (RTCScene p : prototypes_) rtcReleaseScene(p);
     if (device_) rtcReleaseDevice(device_);
   }
   EmbreeScene(const EmbreeScene&) = delete;
@@ -107,12 +129,37 @@ class EmbreeScene {
   }
 
  private:
+  RTCScene new_scene(const EmbreeConfig& config) const {
+    RTCScene scene = rtcNewScene(device_);
+    rtcSetSceneFlags(scene, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneBuildQuality(scene, config.quality);
+    return scene;
+  }
+  /// One triangle geometry of `m`, attached to `scene` as geometry 0.
+  void attach_mesh(RTCScene scene, const EmbreeMesh& m, const EmbreeConfig& config) const {
+    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, config.quality);
+    // rtcSetNewGeometryBuffer pads the allocation as Embree's SIMD loads require.
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), m.vertex_count));
+    auto* t = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
+                                                                  RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t),
+                                                                  m.triangle_count));
+    if (!v || !t) throw std::runtime_error("embree: cannot allocate geometry buffers");
+    for (std::size_t i = 0; i < 3 * m.vertex_count; ++i) v[i] = m.xyz[i];
+    for (std::size_t i = 0; i < 3 * m.triangle_count; ++i) t[i] = m.indices[i];
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(scene, geometry, 0);
+    rtcReleaseGeometry(geometry);
+  }
+
   static void on_error(void*, RTCError code, const char* message) {
     std::fprintf(stderr, "embree error: %s: %s\n", error_name(code).c_str(), message ? message : "");
   }
 
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
+  std::vector<RTCScene> prototypes_;
   double build_seconds_ = 0.0;
 };
 
@@ -141,7 +188,7 @@ inline void to_embree(const Ray& r, RTCRayHit& e) {
 /// p = (1-u-v) p0 + u p1 + v p2).
 inline Hit from_embree(const RTCRayHit& e) {
   if (e.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-  return Hit{e.ray.tfar, e.hit.u, e.hit.v, e.hit.primID};
+  return Hit{e.ray.tfar, e.hit.u, e.hit.v, e.hit.primID, e.hit.geomID, e.hit.instID[0]};
 }
 
 /// Lane i of an Embree 16-ray packet from a volley ray.
@@ -162,7 +209,7 @@ inline void to_embree(const Ray& r, RTCRayHit16& e, int i) {
 /// Lane i of an Embree 16-ray packet answer as a volley Hit.
 inline Hit from_embree(const RTCRayHit16& e, int i) {
   if (e.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) return Hit{};
-  return Hit{e.ray.tfar[i], e.hit.u[i], e.hit.v[i], e.hit.primID[i]};
+  return Hit{e.ray.tfar[i], e.hit.u[i], e.hit.v[i], e.hit.primID[i], e.hit.geomID[i], e.hit.instID[0][i]};
 }
 
 inline Hit EmbreeScene::intersect(const Ray& ray) const {
