@@ -232,8 +232,7 @@ AccelInfo Accel::Impl::info() const {
   }
   // Instances: their records and BVHs (the prototypes' structures are theirs, shared).
   info.bytes += instances.size() * (sizeof(Instance) + sizeof(Geometry));
-  for (const Layer& l : layers)
-    info.bytes += l.instance_bvh.nodes.size() * sizeof(core::BvhNode) + l.instance_bvh.prim_index.size() * 4;
+  for (const Layer& l : layers) info.bytes += l.instance_tree.bytes();
   return info;
 }
 

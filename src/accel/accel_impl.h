@@ -15,6 +15,7 @@
 
 #include "accel/accel_file.h"
 #include "accel/engine.h"
+#include "accel/instance_tree.h"
 #include "accel/wide_accel.h"
 #include "core/bvh.h"
 #include "core/polygon.h"
@@ -58,7 +59,7 @@ struct Accel::Impl {
     std::vector<unsigned char> excluded;  ///< per triangle: not in this layer's BVH (another layer's, disabled, degenerate)
     core::BvhStats triangle_stats;        ///< of the binary triangle BVH, as built (unit costs)
     std::vector<std::uint32_t> instances; ///< the layer's instances (places in Impl::instances)
-    core::Bvh instance_bvh;               ///< over their world boxes
+    accel::InstanceTree instance_tree;    ///< over their world boxes
     double built_sah = 0.0;               ///< triangle SAH cost at the last build
     double sah_now = 0.0;                 ///< the same now (after refits)
   };
@@ -89,6 +90,10 @@ struct Accel::Impl {
   std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
   bool refitted = false;          ///< the last commit refitted
   core::BBox bounds;              ///< of every vertex added (a conservative box for the instances of this Accel)
+  /// Boxes whose union holds everything hittable: the wide roots' children where there are
+  /// some, else `bounds`. An instance of this Accel is bounded by them transformed, which
+  /// is tighter than `bounds` transformed when it is rotated.
+  std::vector<core::BBox> bound_parts;
   bool has_instances = false;     ///< some layer holds instances (the queries then walk them after the rest)
   std::vector<Layer> layers;      ///< by descending mask; none when nothing can be hit
   /// A loaded Accel's triangle input, still in the mapped file (Accel::load): unpack() copies
@@ -151,7 +156,7 @@ struct Accel::Impl {
   double built_sah() const;
   double sah_now() const;
 
-  /// Sets `bounds` from the input as it is (all vertices: conservative).
+  /// Sets `bounds` from the input as it is (all vertices: conservative) and `bound_parts`.
   void compute_bounds();
   /// Builds each layer's instance BVH (accel_instances.cpp).
   void build_instances();

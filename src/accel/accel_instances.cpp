@@ -1,13 +1,14 @@
 // Instances (Accel::add_instance): committed Accels placed under affine transforms. Each
-// layer holds a binary BVH over its instances' world boxes; a ray walks it after the
+// layer holds a wide BVH over its instances' world boxes (instance_tree.h); a ray walks it after the
 // layer's own triangles and polygons, is carried into each instance's object space met on
 // the way and queried against the prototype there, bounded by the nearest hit so far.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
 
 #include "accel/accel_impl.h"
-#include "core/bvh_traverse.h"
+#include "core/rounding.h"
 
 namespace volley {
 namespace {
@@ -49,13 +50,22 @@ bool invert(const float* m, float* out) {
   return true;
 }
 
-/// The world box of an instance: its prototype's box with every corner transformed.
-core::BBox world_box(const core::BBox& b, const float* to_world) {
+/// The world box of an instance: every corner of its prototype's bound parts transformed.
+core::BBox world_box(const std::vector<core::BBox>& parts, const float* to_world) {
   core::BBox out;
-  if (!(b.lo.x <= b.hi.x)) return out;
-  for (int corner = 0; corner < 8; ++corner) {
-    const float p[3] = {corner & 1 ? b.hi.x : b.lo.x, corner & 2 ? b.hi.y : b.lo.y, corner & 4 ? b.hi.z : b.lo.z};
-    out.extend(apply(to_world, p, true));
+  for (const core::BBox& b : parts) {
+    if (!(b.lo.x <= b.hi.x)) continue;
+    for (int corner = 0; corner < 8; ++corner) {
+      const float p[3] = {corner & 1 ? b.hi.x : b.lo.x, corner & 2 ? b.hi.y : b.lo.y, corner & 4 ? b.hi.z : b.lo.z};
+      out.extend(apply(to_world, p, true));
+    }
+  }
+  // Widened by the rounding of the corners' transform and of the ray's into object space,
+  // so that no ray the prototype would hit is culled at the box's faces.
+  if (out.lo.x <= out.hi.x) {
+    const float size = std::max({glm::length(out.lo), glm::length(out.hi)});
+    const float pad = core::rounding_gamma(16) * size;
+    out.lo -= glm::vec3(pad), out.hi += glm::vec3(pad);
   }
   return out;
 }
@@ -98,6 +108,27 @@ void Accel::Impl::compute_bounds() {
   }
   for (const core::Polygon& poly : polygons)
     for (const auto& p : poly.vertices) bounds.extend(p);
+  // Tighter parts where every layer is a wide BVH of triangles alone: its root's children.
+  bound_parts.clear();
+  for (const Layer& l : layers) {
+    const accel::WideAccel* wide = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
+    if (!wide || l.polygon_engine || !l.instances.empty()) {
+      bound_parts = {bounds};
+      return;
+    }
+    const accel::WideImage image = wide->image();
+    if (image.root & simd::wide_ref::kLeafBit) {
+      bound_parts = {bounds};
+      return;
+    }
+    const auto& root = *static_cast<const simd::WideNode<simd::kWideN>*>(image.nodes);
+    for (int c = 0; c < simd::kWideN; ++c) {
+      core::BBox b;
+      b.lo = {root.bounds[0][c], root.bounds[2][c], root.bounds[4][c]};
+      b.hi = {root.bounds[1][c], root.bounds[3][c], root.bounds[5][c]};
+      if (b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z) bound_parts.push_back(b);
+    }
+  }
 }
 
 void Accel::Impl::build_instances() {
@@ -109,14 +140,9 @@ void Accel::Impl::build_instances() {
       if (!g.instance || !g.enabled || g.mask != layer.mask) continue;
       const Instance& in = instances[g.index];
       layer.instances.push_back(static_cast<std::uint32_t>(g.index));
-      boxes.push_back(world_box(in.prototype->bounds, in.to_world));
+      boxes.push_back(world_box(in.prototype->bound_parts, in.to_world));
     }
-    // An instance "test" is a whole walk of its prototype: priced high, so that the SAH
-    // splits down to single instances wherever that saves one (perf/instances.md).
-    core::BvhBuildOptions options;
-    options.max_leaf_size = 2;
-    options.intersection_cost = 8.0f;
-    layer.instance_bvh = layer.instances.empty() ? core::Bvh{} : core::build_bvh(boxes, options);
+    layer.instance_tree.build(boxes);
     has_instances |= !layer.instances.empty();
   }
 }
@@ -149,7 +175,7 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
       found = true;
       return true;
     };
-    robust ? core::traverse<false, true>(l.instance_bvh, r, leaf) : core::traverse<false, false>(l.instance_bvh, r, leaf);
+    robust ? l.instance_tree.walk<false, true>(r, leaf) : l.instance_tree.walk<false, false>(r, leaf);
   }
   return found;
 }
@@ -164,7 +190,7 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
       return in.prototype->occluded(local, mask);
     };
     const core::RayT<float> r = accel::to_core(ray);
-    if (robust ? core::traverse<true, true>(l.instance_bvh, r, leaf) : core::traverse<true, false>(l.instance_bvh, r, leaf))
+    if (robust ? l.instance_tree.walk<true, true>(r, leaf) : l.instance_tree.walk<true, false>(r, leaf))
       return true;
   }
   return false;
