@@ -10,39 +10,61 @@ namespace volley::accel {
 void InstanceTree::build(const std::vector<core::BBox>& boxes) {
   nodes_.clear();
   if (boxes.empty()) return;
-  // One instance per leaf: an instance's "test" is a whole walk of its prototype.
+  // Leaves of up to 8 instances where the SAH says so (priced low: the collapse spreads a
+  // leaf's instances over slots of a wide node, each with a box of its own, so a leaf here
+  // only decides how instances are grouped into nodes; perf/instances.md).
   core::BvhBuildOptions options;
-  options.max_leaf_size = 1;
+  options.max_leaf_size = 8;
+  options.intersection_cost = 0.3f;
   const core::Bvh bvh = core::build_bvh(boxes, options);
   if (bvh.nodes.empty()) return;
 
-  // Collapse: each wide node takes the binary node's children, then opens its interior
-  // child of largest area until it has 8 (or only leaves are left); depth first, so a
-  // node's children are written after it.
-  struct Pending {
-    std::uint32_t binary;  // the binary node the wide node stands for
-    std::uint32_t wide;    // its index in nodes_
+  // A child slot's content: a binary node (interior, or a leaf of several instances: both
+  // become a wide node of their own unless opened) or one instance.
+  struct Item {
+    bool instance;
+    std::uint32_t index;  // binary node or instance
   };
-  auto area = [&](std::uint32_t n) { return bvh.nodes[n].box.half_area(); };
+  auto item_of = [&](std::uint32_t n) {
+    const core::BvhNode& b = bvh.nodes[n];
+    return b.is_leaf() && b.count == 1 ? Item{true, bvh.prim_index[b.first_or_child]} : Item{false, n};
+  };
+  auto box_of = [&](const Item& it) { return it.instance ? boxes[it.index] : bvh.nodes[it.index].box; };
+  // The items an opened binary node spreads into: its two children, or a leaf's instances.
+  auto open = [&](std::uint32_t n, std::vector<Item>& out) {
+    const core::BvhNode& b = bvh.nodes[n];
+    if (b.is_leaf()) {
+      for (std::uint32_t k = 0; k < b.count; ++k) out.push_back({true, bvh.prim_index[b.first_or_child + k]});
+    } else {
+      out.push_back(item_of(b.first_or_child));
+      out.push_back(item_of(b.first_or_child + 1));
+    }
+  };
+  auto spread = [&](const core::BvhNode& b) { return b.is_leaf() ? b.count : 2u; };
+
+  // Depth first: a wide node takes its binary node opened, then keeps opening the child of
+  // largest area that still fits, up to 8 slots.
+  struct Pending {
+    std::uint32_t binary, wide;
+  };
   nodes_.emplace_back();
   std::vector<Pending> todo{{0, 0}};
+  std::vector<Item> kids;
   while (!todo.empty()) {
     const Pending p = todo.back();
     todo.pop_back();
-    std::vector<std::uint32_t> kids;
-    if (bvh.nodes[p.binary].is_leaf()) {
-      kids.push_back(p.binary);  // a root that is a leaf
-    } else {
-      kids = {bvh.nodes[p.binary].first_or_child, bvh.nodes[p.binary].first_or_child + 1};
-      while (kids.size() < 8) {
-        int best = -1;
-        for (int k = 0; k < int(kids.size()); ++k)
-          if (!bvh.nodes[kids[k]].is_leaf() && (best < 0 || area(kids[k]) > area(kids[best]))) best = k;
-        if (best < 0) break;
-        const std::uint32_t open = kids[best];
-        kids[best] = bvh.nodes[open].first_or_child;
-        kids.push_back(bvh.nodes[open].first_or_child + 1);
+    kids.clear();
+    open(p.binary, kids);
+    for (;;) {
+      int best = -1;
+      for (int k = 0; k < int(kids.size()); ++k) {
+        if (kids[k].instance || kids.size() - 1 + spread(bvh.nodes[kids[k].index]) > 8) continue;
+        if (best < 0 || box_of(kids[k]).half_area() > box_of(kids[best]).half_area()) best = k;
       }
+      if (best < 0) break;
+      const std::uint32_t n = kids[best].index;
+      kids.erase(kids.begin() + best);
+      open(n, kids);
     }
     for (int k = 0; k < 8; ++k) {
       Node& node = nodes_[p.wide];  // (re-read: emplace_back below may move the array)
@@ -51,13 +73,13 @@ void InstanceTree::build(const std::vector<core::BBox>& boxes) {
         node.child[k] = kEmpty;
         continue;
       }
-      const core::BvhNode& b = bvh.nodes[kids[k]];
-      for (int a = 0; a < 3; ++a) node.lo[a][k] = b.box.lo[a], node.hi[a][k] = b.box.hi[a];
-      if (b.is_leaf()) {
-        node.child[k] = kLeaf | bvh.prim_index[b.first_or_child];
+      const core::BBox b = box_of(kids[k]);
+      for (int a = 0; a < 3; ++a) node.lo[a][k] = b.lo[a], node.hi[a][k] = b.hi[a];
+      if (kids[k].instance) {
+        node.child[k] = kLeaf | kids[k].index;
       } else {
         node.child[k] = static_cast<std::uint32_t>(nodes_.size());
-        todo.push_back({kids[k], static_cast<std::uint32_t>(nodes_.size())});
+        todo.push_back({kids[k].index, static_cast<std::uint32_t>(nodes_.size())});
         nodes_.emplace_back();
       }
     }
