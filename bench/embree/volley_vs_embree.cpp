@@ -32,6 +32,7 @@
 #include <xmmintrin.h>
 
 #include "embree_scene.h"
+#include "embree_scene_of.h"
 #include "io/load_error.h"
 #include "io/ray_file.h"
 #include "io/scene_loader.h"
@@ -340,39 +341,7 @@ int run(const Args& a) {
   config.quality = a.quality == "high" ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
   config.robust = a.robust;
   config.device_config = a.embree_config;
-  // Embree gets the triangles of the objects a ray can see (mask not 0) as one mesh, and
-  // the instances as its instance geometries under volley's geometry ids, so that its
-  // instID is volley's inst.
-  const auto& mesh = desc.mesh;
-  std::vector<std::uint32_t> visible;
-  for (const io::ObjectDesc& o : mesh.objects) {
-    if (o.mask == 0) continue;
-    if (o.mask != kMaskAll) throw std::runtime_error(a.scene + ": object masks other than 0 are not compared");
-    visible.insert(visible.end(), mesh.indices.begin() + std::ptrdiff_t(3 * o.first_triangle),
-                   mesh.indices.begin() + std::ptrdiff_t(3 * (o.first_triangle + o.triangle_count)));
-  }
-  if (mesh.objects.empty()) visible = mesh.indices;
-  std::vector<EmbreeMesh> prototypes;
-  std::vector<EmbreeInstance> instances;
-  std::vector<std::int64_t> prototype_of(mesh.objects.size(), -1);
-  for (std::size_t k = 0; k < desc.instances.size(); ++k) {
-    const io::InstanceDesc& in = desc.instances[k];
-    if (in.mask != kMaskAll) throw std::runtime_error(a.scene + ": instance masks are not compared");
-    const io::ObjectDesc& o = mesh.objects[in.object];
-    if (prototype_of[in.object] < 0) {
-      prototype_of[in.object] = std::int64_t(prototypes.size());
-      prototypes.push_back({&mesh.positions[0].x, mesh.positions.size(), &mesh.indices[3 * o.first_triangle],
-                            o.triangle_count});
-    }
-    const glm::mat4& m = in.transform;
-    instances.push_back({std::size_t(prototype_of[in.object]),
-                         {m[0][0], m[1][0], m[2][0], m[3][0], m[0][1], m[1][1], m[2][1], m[3][1], m[0][2], m[1][2],
-                          m[2][2], m[3][2]},
-                         unsigned(mesh.objects.size() + k)});
-  }
-  const EmbreeScene embree({mesh.positions.empty() ? nullptr : &mesh.positions[0].x, mesh.positions.size(),
-                            visible.data(), visible.size() / 3},
-                           prototypes, instances, config);
+  const EmbreeScene embree = embree_scene_of(desc, a.scene, config);
 
   // Flush-to-zero and denormals-are-zero, as Embree asks of every thread that traces
   // (its verbose output warns of a "severe performance impact" otherwise); both engines

@@ -184,6 +184,21 @@ const char* why_invalid(const volley_ray& r) {
   return nullptr;
 }
 
+/// A masked stream query: the checks (nothing to do for count 0), then trace().
+template <class Out, class Trace>
+volley_status stream_masked(const char* function, const volley_scene* scene, const volley_ray* rays,
+                            const std::uint32_t* masks, std::size_t count, Out* out, const char* out_name,
+                            Trace&& trace) {
+  return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    if (count == 0) return;
+    require_pointer(rays, "rays");
+    require_pointer(masks, "masks");
+    require_pointer(out, out_name);
+    trace();
+  });
+}
+
 }  // namespace
 }  // namespace volley::capi
 
@@ -312,26 +327,14 @@ volley_status volley_occluded16_masked(const volley_scene* scene, const volley_r
 
 volley_status volley_intersect_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                              size_t count, volley_hit* hits) {
-  return guarded("volley_intersect_stream_masked", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    if (count == 0) return;
-    require_pointer(rays, "rays");
-    require_pointer(masks, "masks");
-    require_pointer(hits, "hits");
-    scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits));
-  });
+  return stream_masked("volley_intersect_stream_masked", scene, rays, masks, count, hits, "hits",
+                       [&] { scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits)); });
 }
 
 volley_status volley_occluded_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                             size_t count, uint8_t* occluded) {
-  return guarded("volley_occluded_stream_masked", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    if (count == 0) return;
-    require_pointer(rays, "rays");
-    require_pointer(masks, "masks");
-    require_pointer(occluded, "occluded");
-    scene->accel.occluded(as_cpp(rays), masks, count, occluded);
-  });
+  return stream_masked("volley_occluded_stream_masked", scene, rays, masks, count, occluded, "occluded",
+                       [&] { scene->accel.occluded(as_cpp(rays), masks, count, occluded); });
 }
 
 volley_status volley_validate_rays(const volley_ray* rays, size_t count, size_t* first_invalid) {
