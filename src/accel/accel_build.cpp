@@ -143,6 +143,10 @@ void Accel::Impl::finish_build() {
                   ? layers[0].triangle_engine->wide()
                   : nullptr;
   one_geometry = geometries.size() == 1 && !geometries[0].instance;
+  simple = layers.size() == 1 && !has_instances;
+  simple_mask = simple ? layers[0].mask : 0u;
+  simple_triangles = simple ? layers[0].triangle_engine.get() : nullptr;
+  simple_polygons = simple ? layers[0].polygon_engine.get() : nullptr;
   topology_changed = vertices_changed = refitted = false;
   built_with = {test, isa, robust, reference_double};
 }

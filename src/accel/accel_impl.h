@@ -113,6 +113,12 @@ struct Accel::Impl {
   /// Accel's single-ray queries and full packets without a ray mask call it directly (a
   /// layer of calls less).
   const accel::WideAccel* wide_only = nullptr;
+  /// The engines of the only layer when there is one and no instances (the common scene:
+  /// its queries skip the layer loop), else both null and `simple` false.
+  bool simple = false;
+  std::uint32_t simple_mask = kMaskAll;
+  const accel::TriangleEngine* simple_triangles = nullptr;
+  const accel::Engine* simple_polygons = nullptr;
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
   std::uint32_t new_geometry(std::uint32_t count, bool polygon);

@@ -48,14 +48,18 @@ std::uint32_t Accel::Impl::lanes_of(std::uint32_t active, const std::uint32_t* m
 
 Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
   Hit hit;
-  if (wide_only && (layers[0].mask & mask)) {  // a prototype's usual case (and one call less)
-    wide_only->intersect(ray, hit);
-  } else {
-    for (const Layer& l : layers) {
-      if (!(l.mask & mask)) continue;
-      if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
-      if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+  if (simple) {  // one layer, no instances: the common scene, without the loop
+    if (simple_mask & mask) {
+      if (simple_triangles) simple_triangles->intersect(ray, hit);
+      if (simple_polygons) simple_polygons->intersect(ray, hit);
     }
+    attribute(hit.prim, hit.geom);
+    return hit;
+  }
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask)) continue;
+    if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
+    if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
   }
   attribute(hit.prim, hit.geom);
   if (has_instances) intersect_instances(ray, mask, hit);
@@ -63,7 +67,9 @@ Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
 }
 
 bool Accel::Impl::occluded(const Ray& ray, std::uint32_t mask) const {
-  if (wide_only) return (layers[0].mask & mask) && wide_only->occluded(ray);
+  if (simple)
+    return (simple_mask & mask) && ((simple_triangles && simple_triangles->occluded(ray)) ||
+                                    (simple_polygons && simple_polygons->occluded(ray)));
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
     if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
