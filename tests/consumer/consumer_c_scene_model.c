@@ -9,6 +9,35 @@
 #include "consumer_c.h"
 #include "scene.h"
 
+/* The masked packets of 4 and 8: lane k masked 0x1 (the floor), 0x2 (the table) or 0
+ * (nothing) by `masks`; every ray is `r`. */
+#define CHECK_MASKED_PACKET(K)                                                                                  \
+  {                                                                                                             \
+    volley_ray_packet##K p;                                                                                     \
+    volley_hit_packet##K h;                                                                                     \
+    uint32_t blocked = 0;                                                                                       \
+    int i;                                                                                                      \
+    for (i = 0; i < K; ++i) {                                                                                   \
+      p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2];                                            \
+      p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2];                                            \
+      p.tmin[i] = r->tmin, p.tmax[i] = r->tmax;                                                                 \
+    }                                                                                                           \
+    p.active = (1u << K) - 1u;                                                                                  \
+    volley_reset_hits##K(&h);                                                                                   \
+    expect(volley_intersect##K##_masked(scene, &p, masks, &h), VOLLEY_OK, "volley_intersect" #K "_masked");     \
+    expect(volley_occluded##K##_masked(scene, &p, masks, &blocked), VOLLEY_OK, "volley_occluded" #K "_masked"); \
+    for (i = 0; i < K; ++i) {                                                                                   \
+      const uint32_t want = masks[i] == 0x1u ? 0u : masks[i] == 0x2u ? 1u : VOLLEY_INVALID_ID;                  \
+      check(h.geom[i] == want, "packet" #K " lane by its mask", i);                                             \
+      check(((blocked >> i) & 1u) == (want != VOLLEY_INVALID_ID), "occluded packet" #K " lane by its mask", i); \
+    }                                                                                                           \
+  }
+
+static void check_masked_packets4_8(const volley_scene* scene, const volley_ray* r, const uint32_t* masks) {
+  CHECK_MASKED_PACKET(4)
+  CHECK_MASKED_PACKET(8)
+}
+
 /* Masks: the table (geometry 1) masked 0x2; rays of mask 0x1 see the floor under it, rays
  * of mask 0x2 the table, in every masked form; mask 0 sees nothing. */
 void check_masks(void) {
@@ -54,6 +83,14 @@ void check_masks(void) {
     check(hit_packet.geom[k] == ((k % 3 == 0) ? VOLLEY_INVALID_ID : (k & 1) ? 1u : 0u), "packet lane by its mask", k);
   expect(volley_occluded16_masked(scene, &packet, masks, &blocked_lanes), VOLLEY_OK, "volley_occluded16_masked");
   for (k = 0; k < 16; ++k) check(((blocked_lanes >> k) & 1u) == (k % 3 != 0), "occluded lane by its mask", k);
+  check_masked_packets4_8(scene, &r, masks);
+  {
+    uint8_t blocked_rays[16];
+    for (k = 0; k < 16; ++k) masks[k] = (k & 1) ? 0x2u : 0x0u;
+    expect(volley_occluded_stream_masked(scene, rays, masks, 16, blocked_rays), VOLLEY_OK,
+           "volley_occluded_stream_masked");
+    for (k = 0; k < 16; ++k) check(blocked_rays[k] == (k & 1), "occluded stream ray by its mask", k);
+  }
   expect(volley_intersect16_masked(scene, &packet, NULL, &hit_packet), VOLLEY_ERROR_INVALID_ARGUMENT,
          "volley_intersect16_masked");
   expect(volley_occluded_stream_masked(scene, rays, NULL, 16, (uint8_t*)hits), VOLLEY_ERROR_INVALID_ARGUMENT,
