@@ -48,6 +48,11 @@ std::uint32_t Accel::Impl::lanes_of(std::uint32_t active, const std::uint32_t* m
 
 Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
   Hit hit;
+  if (wide_only) {  // a prototype's usual case: the kernels directly (a call less)
+    if (simple_mask & mask) wide_only->intersect(ray, hit);
+    attribute(hit.prim, hit.geom);
+    return hit;
+  }
   if (simple) {  // one layer, no instances: the common scene, without the loop
     if (simple_mask & mask) {
       if (simple_triangles) simple_triangles->intersect(ray, hit);
@@ -67,6 +72,7 @@ Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
 }
 
 bool Accel::Impl::occluded(const Ray& ray, std::uint32_t mask) const {
+  if (wide_only) return (simple_mask & mask) && wide_only->occluded(ray);
   if (simple)
     return (simple_mask & mask) && ((simple_triangles && simple_triangles->occluded(ray)) ||
                                     (simple_polygons && simple_polygons->occluded(ray)));
