@@ -33,6 +33,7 @@
 
 #include "embree_scene.h"
 #include "embree_scene_of.h"
+#include "query_modes.h"
 #include "io/load_error.h"
 #include "io/ray_file.h"
 #include "io/scene_loader.h"
@@ -44,9 +45,6 @@
 namespace volley::bench {
 namespace {
 
-constexpr float kNegInf = -std::numeric_limits<float>::infinity();
-/// Rays per stream call, as `volley trace --mode stream` chunks them.
-constexpr std::size_t kStreamChunk = 1024;
 
 struct Args {
   std::string scene;
@@ -68,22 +66,6 @@ struct Args {
   int show_differences = 0;
 };
 
-/// The answers of one pass: closest hits, or one byte per ray for occlusion.
-struct Answers {
-  std::vector<Hit> hits;
-  std::vector<std::uint8_t> blocked;
-};
-
-/// One mode: the same query through each engine's matching call.
-struct Mode {
-  std::string name;
-  std::string embree_call;
-  std::string volley_call;
-  bool occlusion = false;
-  std::function<void(const std::vector<Ray>&, Answers&)> embree;
-  std::function<void(const std::vector<Ray>&, Answers&)> volley;
-};
-
 struct Result {
   const Mode* mode = nullptr;
   std::vector<double> embree_s, volley_s;
@@ -93,130 +75,6 @@ struct Result {
   std::size_t embree_hits = 0, volley_hits = 0;
 };
 
-RTCIntersectContext make_context(bool coherent) {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-  return context;
-}
-
-std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel, bool coherent) {
-  const RTCScene scene = embree.scene();
-  std::vector<Mode> modes;
-
-  modes.push_back({"single", "rtcIntersect1", "intersect(Ray)", false,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     for (std::size_t i = 0; i < rays.size(); ++i) {
-                       RTCRayHit e;
-                       to_embree(rays[i], e);
-                       rtcIntersect1(scene, &context, &e);
-                       out.hits[i] = from_embree(e);
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     for (std::size_t i = 0; i < rays.size(); ++i) out.hits[i] = accel.intersect(rays[i]);
-                   }});
-
-  modes.push_back({"packet", "rtcIntersect16", "intersect(RayPacket<16>)", false,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     alignas(64) RTCRayHit16 e;
-                     alignas(64) int valid[16];
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       for (int i = 0; i < 16; ++i) {
-                         valid[i] = i < n ? -1 : 0;
-                         if (i < n) to_embree(rays[b + i], e, i);
-                       }
-                       rtcIntersect16(valid, scene, &context, &e);
-                       for (int i = 0; i < n; ++i) out.hits[b + i] = from_embree(e, i);
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     RayPacket<16> packet;
-                     HitPacket<16> hits;
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       load(packet, rays.data() + b, n);
-                       reset(hits);
-                       accel.intersect(packet, hits);
-                       store(hits, out.hits.data() + b, n);
-                     }
-                   }});
-
-  modes.push_back({"stream", "rtcIntersect1M", "intersect(Ray*, n, Hit*)", false,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     std::vector<RTCRayHit> e(kStreamChunk);
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk) {
-                       const std::size_t n = std::min(kStreamChunk, rays.size() - b);
-                       for (std::size_t i = 0; i < n; ++i) to_embree(rays[b + i], e[i]);
-                       rtcIntersect1M(scene, &context, e.data(), unsigned(n), sizeof(RTCRayHit));
-                       for (std::size_t i = 0; i < n; ++i) out.hits[b + i] = from_embree(e[i]);
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)
-                       accel.intersect(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.hits.data() + b);
-                   }});
-
-  modes.push_back({"occluded1", "rtcOccluded1", "occluded(Ray)", true,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     for (std::size_t i = 0; i < rays.size(); ++i) {
-                       RTCRayHit e;
-                       to_embree(rays[i], e);
-                       rtcOccluded1(scene, &context, &e.ray);
-                       out.blocked[i] = e.ray.tfar == kNegInf ? 1 : 0;
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     for (std::size_t i = 0; i < rays.size(); ++i) out.blocked[i] = accel.occluded(rays[i]) ? 1 : 0;
-                   }});
-
-  modes.push_back({"occluded16", "rtcOccluded16", "occluded(RayPacket<16>)", true,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     alignas(64) RTCRayHit16 e;
-                     alignas(64) int valid[16];
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       for (int i = 0; i < 16; ++i) {
-                         valid[i] = i < n ? -1 : 0;
-                         if (i < n) to_embree(rays[b + i], e, i);
-                       }
-                       rtcOccluded16(valid, scene, &context, &e.ray);
-                       for (int i = 0; i < n; ++i) out.blocked[b + i] = e.ray.tfar[i] == kNegInf ? 1 : 0;
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     RayPacket<16> packet;
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       load(packet, rays.data() + b, n);
-                       const std::uint32_t mask = accel.occluded(packet);
-                       for (int i = 0; i < n; ++i) out.blocked[b + i] = std::uint8_t((mask >> i) & 1u);
-                     }
-                   }});
-
-  modes.push_back({"occluded_stream", "rtcOccluded1M", "occluded(Ray*, n, uint8*)", true,
-                   [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     RTCIntersectContext context = make_context(coherent);
-                     std::vector<RTCRayHit> e(kStreamChunk);
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk) {
-                       const std::size_t n = std::min(kStreamChunk, rays.size() - b);
-                       for (std::size_t i = 0; i < n; ++i) to_embree(rays[b + i], e[i]);
-                       rtcOccluded1M(scene, &context, &e[0].ray, unsigned(n), sizeof(RTCRayHit));
-                       for (std::size_t i = 0; i < n; ++i) out.blocked[b + i] = e[i].ray.tfar == kNegInf ? 1 : 0;
-                     }
-                   },
-                   [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)
-                       accel.occluded(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.blocked.data() + b);
-                   }});
-  return modes;
-}
 
 double timed(const std::function<void(const std::vector<Ray>&, Answers&)>& pass, const std::vector<Ray>& rays,
              Answers& out) {
