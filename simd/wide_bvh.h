@@ -70,6 +70,14 @@ constexpr std::uint32_t leaf_count(std::uint32_t ref) { return (ref >> kCountShi
 constexpr std::uint32_t leaf_first(std::uint32_t ref) { return ref & kFirstMask; }
 }  // namespace wide_ref
 
+/// The box of child slot j of `node` (an unused slot's is empty).
+template <int N>
+inline core::BBox slot_box(const WideNode<N>& node, int j) {
+  core::BBox b;
+  for (int a = 0; a < 3; ++a) b.lo[a] = node.bounds[2 * a][j], b.hi[a] = node.bounds[2 * a + 1][j];
+  return b;
+}
+
 /// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,
 /// the root reference and build statistics. Immutable after build; thread-safe to read.
 template <int N, class Block>

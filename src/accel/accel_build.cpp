@@ -137,8 +137,8 @@ void Accel::Impl::build_polygons(Layer& layer) {
 }
 
 void Accel::Impl::finish_build() {
-  compute_bounds();
   build_instances();
+  compute_bound_parts();
   wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances
                   ? layers[0].triangle_engine->wide()
                   : nullptr;
@@ -147,6 +147,10 @@ void Accel::Impl::finish_build() {
   simple_mask = simple ? layers[0].mask : 0u;
   simple_triangles = simple ? layers[0].triangle_engine.get() : nullptr;
   simple_polygons = simple ? layers[0].polygon_engine.get() : nullptr;
+  stream_packets = !layers.empty() && !has_instances &&
+                   std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
+                     return l.triangle_engine && l.triangle_engine->traces_packets();
+                   });
   topology_changed = vertices_changed = refitted = false;
   built_with = {test, isa, robust, reference_double};
 }
@@ -189,7 +193,7 @@ bool Accel::Impl::refit(const Options& options) {
       l.sah_now = l.triangle_engine->refit({triangles.data(), triangle_ids.data(), n, l.excluded.data()},
                                            index_of.empty() ? nullptr : index_of.data());
   if (!(sah_now() <= kRefitRebuildGrowth * built_sah())) return false;
-  compute_bounds();
+  compute_bound_parts();
   vertices_changed = false;
   refitted = true;
   return true;

@@ -89,10 +89,9 @@ struct Accel::Impl {
   Options built_with;             ///< the options of the last build (isa resolved)
   std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
   bool refitted = false;          ///< the last commit refitted
-  core::BBox bounds;              ///< of every vertex added (a conservative box for the instances of this Accel)
-  /// Boxes whose union holds everything hittable: the wide roots' children where there are
-  /// some, else `bounds`. An instance of this Accel is bounded by them transformed, which
-  /// is tighter than `bounds` transformed when it is rotated.
+  /// Boxes whose union holds everything hittable: the wide roots' children where every
+  /// layer is a wide BVH of triangles, else the box of every vertex added. An instance of
+  /// this Accel is bounded by them transformed (tighter than one box when it is rotated).
   std::vector<core::BBox> bound_parts;
   bool has_instances = false;     ///< some layer holds instances (the queries then walk them after the rest)
   std::vector<Layer> layers;      ///< by descending mask; none when nothing can be hit
@@ -119,6 +118,9 @@ struct Accel::Impl {
   std::uint32_t simple_mask = kMaskAll;
   const accel::TriangleEngine* simple_triangles = nullptr;
   const accel::Engine* simple_polygons = nullptr;
+  /// Streams may go as packets (stream.cpp): every layer's triangle engine traces packets,
+  /// and no instances (walked lane by lane: single rays are faster, perf/instances.md).
+  bool stream_packets = false;
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
   std::uint32_t new_geometry(std::uint32_t count, bool polygon);
@@ -162,8 +164,9 @@ struct Accel::Impl {
   double built_sah() const;
   double sah_now() const;
 
-  /// Sets `bounds` from the input as it is (all vertices: conservative) and `bound_parts`.
-  void compute_bounds();
+  /// Sets `bound_parts` from the structure as built or refitted (the vertices only when
+  /// some layer is not a wide BVH of triangles alone).
+  void compute_bound_parts();
   /// Builds each layer's instance BVH (accel_instances.cpp).
   void build_instances();
   /// The nearest hit through the layers' instances at t < hit.t (tmin as the ray's):

@@ -98,37 +98,35 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   return id;
 }
 
-void Accel::Impl::compute_bounds() {
-  bounds = {};
-  if (packed) {
-    const std::span<const float> v = packed->vertices;
-    for (std::size_t i = 0; i + 2 < v.size(); i += 3) bounds.extend(glm::vec3(v[i], v[i + 1], v[i + 2]));
-  } else {
-    for (const glm::vec3& p : triangles) bounds.extend(p);
-  }
-  for (const core::Polygon& poly : polygons)
-    for (const auto& p : poly.vertices) bounds.extend(p);
-  // Tighter parts where every layer is a wide BVH of triangles alone: its root's children.
+void Accel::Impl::compute_bound_parts() {
+  // Where every layer is a wide BVH of triangles alone: the used children of its root.
   bound_parts.clear();
+  bool wide = !layers.empty();
   for (const Layer& l : layers) {
-    const accel::WideAccel* wide = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
-    if (!wide || l.polygon_engine || !l.instances.empty()) {
-      bound_parts = {bounds};
-      return;
-    }
-    const accel::WideImage image = wide->image();
-    if (image.root & simd::wide_ref::kLeafBit) {
-      bound_parts = {bounds};
-      return;
+    const accel::WideAccel* w = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
+    const accel::WideImage image = w ? w->image() : accel::WideImage{};
+    if (!w || l.polygon_engine || !l.instances.empty() || (image.root & simd::wide_ref::kLeafBit)) {
+      wide = false;
+      break;
     }
     const auto& root = *static_cast<const simd::WideNode<simd::kWideN>*>(image.nodes);
     for (int c = 0; c < simd::kWideN; ++c) {
-      core::BBox b;
-      b.lo = {root.bounds[0][c], root.bounds[2][c], root.bounds[4][c]};
-      b.hi = {root.bounds[1][c], root.bounds[3][c], root.bounds[5][c]};
+      const core::BBox b = simd::slot_box(root, c);
       if (b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z) bound_parts.push_back(b);
     }
   }
+  if (wide) return;
+  // Otherwise one box of every vertex added (conservative).
+  core::BBox all;
+  if (packed) {
+    const std::span<const float> v = packed->vertices;
+    for (std::size_t i = 0; i + 2 < v.size(); i += 3) all.extend(glm::vec3(v[i], v[i + 1], v[i + 2]));
+  } else {
+    for (const glm::vec3& p : triangles) all.extend(p);
+  }
+  for (const core::Polygon& poly : polygons)
+    for (const auto& p : poly.vertices) all.extend(p);
+  bound_parts = {all};
 }
 
 void Accel::Impl::build_instances() {

@@ -165,7 +165,7 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
   };
   if constexpr (K == 16) {
     if (!masks && wide_only && all_lanes_active(rays)) return wide_only->occluded(rays);
-    if (!masks && layers.size() == 1 && !has_instances && all_lanes_active(rays)) return trace(layers[0], rays);
+    if (!masks && simple && all_lanes_active(rays)) return trace(layers[0], rays);
   }
   const std::uint32_t active = rays.active & lane_bits(K);
   std::uint32_t blocked = 0;

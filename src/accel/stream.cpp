@@ -21,15 +21,12 @@ bool same_octant(const Ray* rays, std::size_t n) {
   return all == any;
 }
 
-/// Whether rays[0 .. n) go as one packet: 16 of them, engines that trace packets, no
-/// instances (walked lane by lane: single rays are faster, perf/instances.md), and AVX-512
-/// (packets of any octants pay there) or one octant.
+/// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
+/// (Accel::Impl::stream_packets), and AVX-512 (packets of any octants pay there) or one
+/// octant.
 template <class Impl>
 bool as_packet(const Impl& impl, const Ray* rays, std::size_t n) {
-  if (n != 16 || impl.layers.empty() || impl.has_instances) return false;
-  for (const auto& l : impl.layers)
-    if (!l.triangle_engine || !l.triangle_engine->traces_packets()) return false;
-  return impl.isa == Isa::avx512 || same_octant(rays, n);
+  return n == 16 && impl.stream_packets && (impl.isa == Isa::avx512 || same_octant(rays, n));
 }
 
 }  // namespace

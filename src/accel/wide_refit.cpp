@@ -18,12 +18,7 @@ namespace {
 
 constexpr int N = simd::kWideN;
 
-/// The box of slot j of `node`.
-core::BBox slot_box(const simd::WideNode<N>& node, int j) {
-  core::BBox b;
-  for (int a = 0; a < 3; ++a) b.lo[a] = node.bounds[2 * a][j], b.hi[a] = node.bounds[2 * a + 1][j];
-  return b;
-}
+using simd::slot_box;
 
 void set_slot_box(simd::WideNode<N>& node, int j, const core::BBox& b) {
   for (int a = 0; a < 3; ++a) node.bounds[2 * a][j] = b.lo[a], node.bounds[2 * a + 1][j] = b.hi[a];
