@@ -3,6 +3,8 @@
 // Embree instance geometries under volley's geometry ids (so Embree's instID is volley's
 // inst). Masks other than 0 and all bits are refused: they are not compared.
 #pragma once
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -35,11 +37,10 @@ inline EmbreeScene embree_scene_of(const io::SceneDesc& desc, const std::string&
       prototypes.push_back({&mesh.positions[0].x, mesh.positions.size(), &mesh.indices[3 * o.first_triangle],
                             o.triangle_count});
     }
-    const glm::mat4& m = in.transform;
-    instances.push_back({std::size_t(prototype_of[in.object]),
-                         {m[0][0], m[1][0], m[2][0], m[3][0], m[0][1], m[1][1], m[2][1], m[3][1], m[0][2], m[1][2],
-                          m[2][2], m[3][2]},
-                         unsigned(mesh.objects.size() + k)});
+    EmbreeInstance e{std::size_t(prototype_of[in.object]), {}, unsigned(mesh.objects.size() + k)};
+    const std::array<float, 12> rows = in.rows();
+    std::copy(rows.begin(), rows.end(), e.transform);
+    instances.push_back(e);
   }
   return EmbreeScene({mesh.positions.empty() ? nullptr : &mesh.positions[0].x, mesh.positions.size(), visible.data(),
                       visible.size() / 3},

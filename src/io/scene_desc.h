@@ -1,6 +1,7 @@
 // A scene as plain data, exactly as read from a .json scene or a bare mesh: no
 // acceleration structure, no derived quantities. Loaders fill it; the renderer reads it.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -90,6 +91,11 @@ struct InstanceDesc {
   std::size_t object = 0;           ///< index in MeshDesc::objects of the object it places ("of")
   glm::mat4 transform{1.0f};
   std::uint32_t mask = 0xffffffffu;
+  /// The transform as Accel::add_instance takes it: the 3x4 matrix [A | t] row by row.
+  std::array<float, 12> rows() const {
+    const glm::mat4& m = transform;  // column-major: m[column][row]
+    return {m[0][0], m[1][0], m[2][0], m[3][0], m[0][1], m[1][1], m[2][1], m[3][1], m[0][2], m[1][2], m[2][2], m[3][2]};
+  }
 };
 
 struct SceneDesc {

@@ -160,11 +160,9 @@ void Scene::add_instances(const io::SceneDesc& desc, const Options& options) {
   }
   for (const io::InstanceDesc& in : desc.instances) {
     const glm::mat4& m = in.transform;
-    const float rows[12] = {m[0][0], m[1][0], m[2][0], m[3][0], m[0][1], m[1][1],
-                            m[2][1], m[3][1], m[0][2], m[1][2], m[2][2], m[3][2]};
     std::uint32_t id;
     try {
-      id = accel_.add_instance(prototypes_[static_cast<std::size_t>(prototype_of[in.object])], rows);
+      id = accel_.add_instance(prototypes_[static_cast<std::size_t>(prototype_of[in.object])], in.rows().data());
     } catch (const Error& e) {
       throw Error("instance '" + in.name + "': " + e.what());
     }
