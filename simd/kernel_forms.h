@@ -1,6 +1,7 @@
 // The pieces both kernel forms share: the vectorized test of each TriangleTest, and the
 // decision on a candidate's quotient.
 #pragma once
+#include <type_traits>
 #include <bit>
 #include <cstdint>
 #include <limits>
@@ -38,6 +39,10 @@ struct TestOfT<Arch, TriangleTest::watertight> {
 /// The vectorized test of `Test` on Arch (a TriangleTestLanes: triangle_test.h).
 template <class Arch, TriangleTest Test>
 using TestOf = typename TestOfT<Arch, Test>::type;
+/// The test of the crossing queries (all hits, counts): the watertight test with the
+/// exactly-once rule; Möller and plane as they are (no rule for their ties).
+template <class Arch, TriangleTest Test>
+using CrossingTestOf = std::conditional_t<Test == TriangleTest::watertight, WatertightTest<Arch, true>, TestOf<Arch, Test>>;
 
 /// The valid lanes of `c` that hit, given their quotient t (cand_t) and the upper end.
 template <class T>

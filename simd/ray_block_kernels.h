@@ -33,7 +33,41 @@ struct RayBlockKernels {
   /// The same, inlined into the caller (as intersect_inline).
   [[gnu::always_inline]] inline static bool occluded_inline(const PreparedRay& ray, const Block* blocks,
                                                             std::uint32_t count);
+  /// Every triangle of blocks[0 .. count) hit with tmin <= t < ray.tmax by the crossing
+  /// test (detail::CrossingTestOf): calls sink(prim, t, u, v) for each, in lane order.
+  template <class Sink>
+  [[gnu::always_inline]] inline static void all_inline(const PreparedRay& ray, const Block* blocks,
+                                                       std::uint32_t count, Sink& sink);
 };
+
+template <class Arch, TriangleTest Test>
+template <class Sink>
+void RayBlockKernels<Arch, Test>::all_inline(const PreparedRay& ray, const Block* blocks, std::uint32_t count,
+                                             Sink& sink) {
+  using T = detail::CrossingTestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  constexpr bool kScaled = detail::kDetScaled<T>;
+  const auto rays = T::broadcast(ray);
+  const B upper(ray.ray.tmax);
+  const float tmin = ray.ray.tmin, tmax = ray.ray.tmax;
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const typename T::Cand cand = T::template test<true>(rays, T::load_block(blocks[b], rays), upper);
+    std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
+    if (bits == 0) continue;
+    alignas(64) float ts[W], us[W], vs[W], dens[W];
+    cand.t.store_aligned(ts);
+    cand.u.store_aligned(us);
+    cand.v.store_aligned(vs);
+    if constexpr (kScaled) cand.den.store_aligned(dens);
+    for (; bits != 0; bits &= bits - 1) {
+      const int lane = std::countr_zero(bits);
+      // Det-scaled tests decide on the quotient, as the closest-hit loop does.
+      const float t = kScaled ? ts[lane] / dens[lane] : ts[lane];
+      if (kScaled && !(tmin <= t && t < tmax)) continue;
+      sink(blocks[b].prim[lane], t, kScaled ? us[lane] / dens[lane] : us[lane], kScaled ? vs[lane] / dens[lane] : vs[lane]);
+    }
+  }
+}
 
 // ---------------------------------------------------------------------------------------
 

@@ -28,6 +28,7 @@
 #include <limits>
 
 #include "core/kernel_constants.h"
+#include "core/triangle_watertight.h"
 #include "simd/kernel_common.h"
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"
@@ -40,7 +41,10 @@ namespace volley::simd::detail {
 /// Watertight test on kLanes<Arch> (ray, triangle) pairs. Reads WatertightBlock<kLanes<Arch>>.
 /// Zero-area triangles are made NaN lanes when the block is built (the oracle's first
 /// check), so the kernel never sees one.
-template <class Arch>
+/// Crossing: the exactly-once rule of the crossing queries (core::intersect_watertight's
+/// Crossing): lanes with an exactly-zero edge function are decided in the cold fallback by
+/// core::crossing_inside; the hot path is the same.
+template <class Arch, bool Crossing = false>
 struct WatertightTest {
   /// The candidates' quotients decide (the kernel forms call confirm() on them).
   static constexpr Decision kDecision = Decision::quotient;
@@ -168,11 +172,14 @@ struct WatertightTest {
   /// Recomputes the edge functions of the lanes with a zero one in double (exact
   /// products) and returns all three. Out of line and cold: the test stays small enough
   /// to inline, and its hot path keeps the edge functions in registers.
-  [[gnu::noinline, gnu::cold]] static Edges fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew);
+  /// Crossing: `crossing_in` gets the lanes inside by core::crossing_inside (every lane:
+  /// those with no zero edge function by their signs).
+  [[gnu::noinline, gnu::cold]] static Edges fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew,
+                                                     std::uint32_t* crossing_in = nullptr);
 };
 
-template <class Arch>
-auto WatertightTest<Arch>::edges(const Rays& r, const Tris& tri, M& inside) -> Edges {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::edges(const Rays& r, const Tris& tri, M& inside) -> Edges {
   const B zero(0.0f);
   Sheared s;
   Edges e = edge_functions(r, tri, s);
@@ -183,14 +190,20 @@ auto WatertightTest<Arch>::edges(const Rays& r, const Tris& tri, M& inside) -> E
   if (all_nonzero<Arch>(e.u, e.v, e.w)) [[likely]] {
     inside = same_sign_bit<Arch>(e.u, e.v, e.w);
   } else {
-    e = fallback(s.ax, s.ay, s.bx, s.by, s.cx, s.cy, e.u, e.v, e.w);
-    inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
+    if constexpr (Crossing) {
+      std::uint32_t in = 0;
+      e = fallback(s.ax, s.ay, s.bx, s.by, s.cx, s.cy, e.u, e.v, e.w, &in);
+      inside = mask_from_bits<Arch>(in);
+    } else {
+      e = fallback(s.ax, s.ay, s.bx, s.by, s.cx, s.cy, e.u, e.v, e.w);
+      inside = ~(((e.u < zero) | (e.v < zero) | (e.w < zero)) & ((e.u > zero) | (e.v > zero) | (e.w > zero)));
+    }
   }
   return e;
 }
 
-template <class Arch>
-auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::depth(const Rays& r, const Tris& tri) -> Depth {
   M inside;
   Edges e = edges(r, tri, inside);
   // det NaN or Inf fails here; det = 0 (the ray lies in the plane) fails on its quotient
@@ -207,9 +220,9 @@ auto WatertightTest<Arch>::depth(const Rays& r, const Tris& tri) -> Depth {
   return d;
 }
 
-template <class Arch>
+template <class Arch, bool Crossing>
 template <bool EarlyExit>
-auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
+auto WatertightTest<Arch, Crossing>::test(const Rays& r, const Tris& tri, B upper) -> Cand {
   M inside;
   Edges e = edges(r, tri, inside);
   // det NaN or Inf fails here; det = 0 (the ray lies in the plane) fails on its quotient
@@ -227,8 +240,8 @@ auto WatertightTest<Arch>::test(const Rays& r, const Tris& tri, B upper) -> Cand
   return {valid, ts, e.v, e.w, det};
 }
 
-template <class Arch>
-auto WatertightTest<Arch>::sure_range(B tmin, B upper) -> SureRange {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::sure_range(B tmin, B upper) -> SureRange {
   // Why these are sure (q = t det / |det| exactly, t = fl(q); rounding is monotonic):
   //  - upper end, hi = fl(min(upper, FLT_MAX) (1 - 8 eps)) for upper >= FLT_MIN (else
   //    -inf: nothing sure). t det < fl(hi |det|) gives q < hi / (1 - eps/2) (normal
@@ -248,10 +261,12 @@ auto WatertightTest<Arch>::sure_range(B tmin, B upper) -> SureRange {
   return {lo, hi};
 }
 
-template <class Arch>
-auto WatertightTest<Arch>::fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew) -> Edges {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B ev, B ew,
+                                              std::uint32_t* crossing_in) -> Edges {
   const B zero(0.0f);
   std::uint32_t lanes = bits_from_mask<Arch>((eu == zero) | (ev == zero) | (ew == zero));
+  if (crossing_in) *crossing_in = bits_from_mask<Arch>(same_sign_bit<Arch>(eu, ev, ew)) & ~lanes;
   alignas(64) float fax[W], fay[W], fbx[W], fby[W], fcx[W], fcy[W], feu[W], fev[W], few[W];
   ax.store_aligned(fax), ay.store_aligned(fay), bx.store_aligned(fbx), by.store_aligned(fby);
   cx.store_aligned(fcx), cy.store_aligned(fcy);
@@ -261,9 +276,12 @@ auto WatertightTest<Arch>::fallback(B ax, B ay, B bx, B by, B cx, B cy, B eu, B 
     // Float products are exact in double, so only the subtraction rounds (and fusing it
     // would change nothing).
     const int i = std::countr_zero(lanes);
-    feu[i] = float(double(fcx[i]) * double(fby[i]) - double(fcy[i]) * double(fbx[i]));
-    fev[i] = float(double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]));
-    few[i] = float(double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]));
+    const double du = double(fcx[i]) * double(fby[i]) - double(fcy[i]) * double(fbx[i]);
+    const double dv = double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]);
+    const double dw = double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]);
+    feu[i] = float(du), fev[i] = float(dv), few[i] = float(dw);
+    if (crossing_in && core::crossing_inside(du, dv, dw, fax[i], fay[i], fbx[i], fby[i], fcx[i], fcy[i]))
+      *crossing_in |= 1u << i;
   }
   return {B::load_aligned(feu), B::load_aligned(fev), B::load_aligned(few)};
 }

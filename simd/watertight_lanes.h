@@ -10,8 +10,8 @@
 
 namespace volley::simd::detail {
 
-template <class Arch>
-auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::broadcast(const PreparedRay& r) -> Rays {
   Rays out;
   for (int i = 0; i < 3; ++i) out.o[i] = B(r.ray.org[i]);
   out.okx = B(r.ray.org[r.k[0]]);
@@ -31,9 +31,9 @@ auto WatertightTest<Arch>::broadcast(const PreparedRay& r) -> Rays {
   return out;
 }
 
-template <class Arch>
+template <class Arch, bool Crossing>
 template <int K>
-void WatertightTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
+void WatertightTest<Arch, Crossing>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
   using I = IntB<Arch>;
   out.rays = rays;
   std::uint32_t axes_seen = 0;  // bit (kz * 2 + swapped) of every active lane
@@ -85,9 +85,9 @@ void WatertightTest<Arch>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& 
   }
 }
 
-template <class Arch>
+template <class Arch, bool Crossing>
 template <int K>
-auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays {
+auto WatertightTest<Arch, Crossing>::load(const PreparedPacket<K>& p, int offset) -> Rays {
   using I = IntB<Arch>;
   Rays out;
   out.o[0] = B::load_aligned(p.rays.ox + offset);
@@ -122,8 +122,8 @@ auto WatertightTest<Arch>::load(const PreparedPacket<K>& p, int offset) -> Rays 
   return out;
 }
 
-template <class Arch>
-auto WatertightTest<Arch>::load_block(const Block& b, const Rays& r) -> Tris {
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::load_block(const Block& b, const Rays& r) -> Tris {
   // Single ray: always uniform, so the permutation is an index into the block. Addressed
   // as bytes of the block (vertex k's arrays at a fixed offset from p0's), so that three
   // offsets serve all nine loads instead of nine addresses kept in registers.
@@ -136,9 +136,9 @@ auto WatertightTest<Arch>::load_block(const Block& b, const Rays& r) -> Tris {
           at(1, z) - r.okz, at(2, x) - r.okx, at(2, y) - r.oky, at(2, z) - r.okz};
 }
 
-template <class Arch>
+template <class Arch, bool Crossing>
 template <int BW>
-auto WatertightTest<Arch>::broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
+auto WatertightTest<Arch, Crossing>::broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
   if (r.uniform) {
     const int kx = r.kx, ky = r.ky, kz = r.kz;
     return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,

@@ -7,6 +7,7 @@
 #include "simd/wide/kernels.h"
 #include "simd/wide/packet_entry.h"
 #include "simd/wide/packet_walk.h"
+#include "simd/wide/point_walk.h"
 #include "simd/wide/queries.h"
 #include "simd/wide/single_walk.h"
 

@@ -38,9 +38,11 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <vector>
 #include <xsimd/xsimd.hpp>
 
 #include "core/kernel_constants.h"
+#include "core/point_triangle.h"
 #include "simd/arch.h"
 #include "simd/block_kernels.h"
 #include "simd/kernel_common.h"
@@ -134,6 +136,11 @@ struct WideKernels {
   static void intersect_erased(const void* bvh, const Ray& ray, Hit& hit);
   /// True when some triangle is hit with ray.tmin <= t < ray.tmax (`bvh` as above).
   static bool occluded_erased(const void* bvh, const Ray& ray);
+  /// Every triangle hit with ray.tmin <= t < ray.tmax by the crossing test
+  /// (detail::CrossingTestOf), appended to `out` in visiting order (prim = the block's id).
+  static void all_hits(const View& bvh, const Ray& ray, std::vector<Hit>& out);
+  /// The nearest point of the triangles to `query.p` within sqrt(query.d2) (point_walk.h).
+  static void closest_point(const View& bvh, core::PointQuery& query);
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes

@@ -26,6 +26,7 @@ struct Lanes8<Arch, true> {
     return _mm256_broadcastss_ps(L == 0 ? v : _mm_shuffle_ps(v, v, L * 0x55));
   }
   static V sub(V a, V b) { return _mm256_sub_ps(a, b); }
+  static V add(V a, V b) { return _mm256_add_ps(a, b); }
   static V mul(V a, V b) { return _mm256_mul_ps(a, b); }
   /// The ISA has FMA (AVX2 + FMA, AVX-512): slab distances in one rounding (walk).
   static constexpr bool kFma = true;
@@ -55,6 +56,7 @@ struct Lanes8<Arch, false> {
     return {b, b};
   }
   static V sub(V x, V y) { return {_mm_sub_ps(x.a, y.a), _mm_sub_ps(x.b, y.b)}; }
+  static V add(V x, V y) { return {_mm_add_ps(x.a, y.a), _mm_add_ps(x.b, y.b)}; }
   static V mul(V x, V y) { return {_mm_mul_ps(x.a, y.a), _mm_mul_ps(x.b, y.b)}; }
   static constexpr bool kFma = false;
   static V max(V x, V y) { return {_mm_max_ps(x.a, y.a), _mm_max_ps(x.b, y.b)}; }

@@ -102,6 +102,24 @@ struct AnyHitRay {
   bool answer() const { return occluded; }
 };
 
+/// Every hit of one ray by the crossing test (all hits, counts): each leaf's hits go to
+/// `sink`, nothing is pruned and the walk never ends early.
+template <class Kernels, class Sink>
+struct AllHitsRay {
+  using Leaf = RayBlockKernels<typename Kernels::SingleArch, Kernels::kTest>;
+  static constexpr bool kNearFirst = false;
+  static constexpr bool kSureRange = false;
+  Sink& sink;
+
+  float bound(const Ray& ray) const { return ray.tmax; }
+  [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
+                                       std::uint32_t count, float&) {
+    Leaf::all_inline(pr, blocks, count, sink);
+    return LeafStep::go_on;
+  }
+  bool answer() const { return false; }
+};
+
 /// Closest hits of a packet's lanes (hits.t on entry bounds each lane like tmax).
 template <class Kernels>
 struct ClosestHitPacket {

@@ -24,6 +24,9 @@
 
 namespace volley {
 
+/// Hits nearest first; ties (one t on two primitives) by instance, geometry, primitive.
+void sort_hits(Hit* first, Hit* last);
+
 struct Accel::Impl {
   /// One add_triangles / add_polygon call: its primitives have the internal ids first ..
   /// first + count (the engines answer with those; attribute() turns one back into the
@@ -173,6 +176,8 @@ struct Accel::Impl {
   /// overwrites `hit` (complete: inst, geom, prim) and returns true when there is one.
   bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const;
   bool occluded_instances(const Ray& ray, std::uint32_t mask) const;
+  /// Every hit through the layers' instances, appended to `out` (inst set).
+  void all_hits_instances(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const;
 
   // Queries (accel_query.cpp, stream.cpp): rays see the layers whose mask shares a bit with
   // `mask` (kMaskAll for the queries without a mask); mask 0 sees nothing.
@@ -188,6 +193,12 @@ struct Accel::Impl {
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
   AccelInfo info() const;
+  /// Every hit of the layers `mask` selects, instances included, appended to `out`
+  /// attributed (geom, prim, inst) in no particular order (accel_crossings.cpp).
+  void all_hits(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const;
+  /// The nearest surface point within sqrt(query.d2) (accel_points.cpp). Throws Error
+  /// for instances and the plane test.
+  ClosestPoint closest_point(core::PointQuery& query) const;
 
  private:
   /// load(): the geometry table into `geometries`, checked against itself and the meta

@@ -194,4 +194,19 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
   return false;
 }
 
+void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const {
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask) || l.instances.empty()) continue;
+    auto leaf = [&](std::uint32_t k, float&) {
+      const Instance& in = instances[l.instances[k]];
+      const std::size_t first = out.size();
+      in.prototype->all_hits(to_object(in.to_object, ray), mask, out);
+      for (std::size_t i = first; i < out.size(); ++i) out[i].inst = in.geometry;
+      return false;
+    };
+    const core::RayT<float> r = accel::to_core(ray);
+    robust ? l.instance_tree.walk<false, true>(r, leaf) : l.instance_tree.walk<false, false>(r, leaf);
+  }
+}
+
 }  // namespace volley

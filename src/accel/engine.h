@@ -12,6 +12,7 @@
 #include <glm/glm.hpp>
 
 #include "core/bvh.h"
+#include "core/point_triangle.h"
 #include "core/polygon.h"
 #include "volley/accel.h"
 #include "volley/options.h"
@@ -37,6 +38,12 @@ class Engine {
   virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const;
   /// The lanes of `lanes` (active ones) that something occludes. Lane by lane by default.
   virtual std::uint32_t occluded(const RayPacket<16>& rays, std::uint32_t lanes) const;
+  /// Every hit with tmin <= t < tmax, appended to `out` (prim = the engine's id), by the
+  /// crossing rule where the test has one (the watertight test: each crossing of a closed
+  /// mesh once, docs/crossings.md).
+  virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;
+  /// Offers the engine's primitives to a point query: updates `query` with a nearer one.
+  virtual void closest_point(core::PointQuery& query) const = 0;
   /// Whether packets are traced as packets, not lane by lane (the stream policy packs rays
   /// into packets only then).
   virtual bool traces_packets() const { return false; }

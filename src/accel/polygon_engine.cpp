@@ -32,6 +32,18 @@ class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
     info.bytes += s.bytes;
   }
 
+  void all_hits(const Ray& ray, std::vector<Hit>& out) const override {
+    if (bvh_.nodes.empty()) return;
+    const core::RayT<float> r = to_core(ray);
+    every_leaf(bvh_, ray, [&](std::uint32_t prim) {
+      float t;
+      if (core::intersect_polygon(r, polygons_[prim], t)) out.push_back(Hit{t, 0.0f, 0.0f, ids_[prim]});
+    });
+  }
+  void closest_point(core::PointQuery& query) const override {
+    core::nearest_walk(bvh_, query, [&](std::uint32_t prim) { core::offer_polygon(query, polygons_[prim], ids_[prim]); });
+  }
+
   template <bool AnyHit, bool Robust>
   bool trace(const core::RayT<float>& r, Hit& hit) const {
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {

@@ -8,6 +8,8 @@
 
 #include "accel/engine.h"
 #include "core/bvh.h"
+#include "core/bvh_nearest.h"
+#include "core/bvh_traverse.h"
 #include "core/triangle.h"
 
 namespace volley::accel {
@@ -33,6 +35,19 @@ class ScalarQueries : public Base {
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }
+
+ protected:
+  /// Calls leaf(prim) for the primitives of every leaf the ray's box test passes (the
+  /// committed slab test; nothing pruned): the walk of the crossing queries.
+  template <class Leaf>
+  void every_leaf(const core::Bvh& bvh, const Ray& ray, Leaf&& leaf) const {
+    auto each = [&](std::uint32_t prim, float&) {
+      leaf(prim);
+      return false;
+    };
+    const core::RayT<float> r = to_core(ray);
+    robust_ ? core::traverse<false, true>(bvh, r, each) : core::traverse<false, false>(bvh, r, each);
+  }
   bool robust_;
 };
 
@@ -62,6 +77,29 @@ class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
     return stats_.sah_cost;
   }
   double sah_cost() const override { return stats_.sah_cost; }
+
+  /// The crossing queries: every triangle hit, by the crossing rule for the watertight test
+  /// (in Real, t, u, v rounded to float; a t that rounds onto tmax is dropped).
+  void all_hits(const Ray& ray, std::vector<Hit>& out) const override {
+    if (bvh_.nodes.empty()) return;
+    const core::RayT<Real> q = core::ray_cast<Real>(to_core(ray));
+    const core::WoopRay<Real> woop = core::make_woop_ray(q.dir);
+    this->every_leaf(bvh_, ray, [&](std::uint32_t prim) {
+      core::TriHit<Real> h;
+      const bool hit = test_ == TriangleTest::watertight ? crossing_triangle(q, woop, prim, h) : test_triangle(q, woop, prim, h);
+      if (hit && float(h.t) < ray.tmax) out.push_back(Hit{float(h.t), float(h.u), float(h.v), triangles_.ids[prim]});
+    });
+  }
+  /// The nearest triangle point (in Real, as core::offer_triangle_vertices); left-out
+  /// triangles (degenerate, another layer's, disabled) are skipped as the wide blocks skip them.
+  void closest_point(core::PointQuery& query) const override {
+    core::nearest_walk(bvh_, query, [&](std::uint32_t prim) {
+      if (triangles_.excluded[prim]) return;
+      const glm::vec3* p = &triangles_.vertices[3 * std::size_t{prim}];
+      const Real a[3] = {p[0].x, p[0].y, p[0].z}, b[3] = {p[1].x, p[1].y, p[1].z}, c[3] = {p[2].x, p[2].y, p[2].z};
+      core::offer_triangle_vertices(query, a, b, c, triangles_.ids[prim]);
+    });
+  }
 
   void describe(AccelInfo& info) const override {
     info.nodes = stats_.nodes;
@@ -113,6 +151,14 @@ class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
         return core::intersect_watertight(q, woop, p0, p1, p2, h);
     }
     return false;
+  }
+
+  /// The watertight test with the crossing rule (core::intersect_watertight's Crossing).
+  bool crossing_triangle(const core::RayT<Real>& q, const core::WoopRay<Real>& woop, std::uint32_t prim,
+                         core::TriHit<Real>& h) const {
+    const glm::vec3* p = &triangles_.vertices[3 * prim];
+    return core::intersect_watertight<Real, false, true>(q, woop, core::Vec3<Real>(p[0]), core::Vec3<Real>(p[1]),
+                                                         core::Vec3<Real>(p[2]), h);
   }
 
   TriangleTest test_;

@@ -76,6 +76,8 @@ class WideAccelFor final : public WideAccel {
     Kernels::intersect(view_, rays, hits);
   }
   std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view_, rays); }
+  void all_hits(const Ray& ray, std::vector<Hit>& out) const override { Kernels::all_hits(view_, ray, out); }
+  void closest_point(core::PointQuery& query) const override { Kernels::closest_point(view_, query); }
 
  private:
   typename Kernels::View view_{nullptr, nullptr, simd::wide_ref::kEmptyRef};

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/bvh.h"
+#include "core/point_triangle.h"
 #include "simd/wide_bvh.h"
 #include "volley/options.h"
 #include "volley/packet.h"
@@ -79,6 +80,12 @@ class WideAccel {
   virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const = 0;
   /// Mask of the active lanes that something occludes.
   virtual std::uint32_t occluded(const RayPacket<16>& rays) const = 0;
+  /// Every triangle hit with tmin <= t < tmax by the crossing test (the watertight test's
+  /// exactly-once rule), appended to `out` in visiting order (prim = the triangle's id).
+  virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;
+  /// The nearest triangle point to query.p within sqrt(query.d2): updates `query`. Throws
+  /// std::invalid_argument for the plane test (its blocks keep no vertices).
+  virtual void closest_point(core::PointQuery& query) const = 0;
 
  protected:
   /// The single-ray entries of the kernels (WideKernels::intersect_erased, occluded_erased)

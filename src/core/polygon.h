@@ -38,6 +38,31 @@ Vec3<float> polygon_lo(const Polygon& poly);
 /// Upper corner, as polygon_lo.
 Vec3<float> polygon_hi(const Polygon& poly);
 
+/// The even-odd test of intersect_polygon on a point (qu, qv) of the polygon's 2D projection
+/// (axes axis_u, axis_v), with its half-open boundary rule.
+template <class T>
+bool polygon_inside_2d(const Polygon& poly, T qu, T qv) {
+  // Even-odd: count the edges crossed by the 2D ray from q toward +u.
+  bool inside = false;
+  const std::size_t count = poly.vertices.size();
+  for (std::size_t i = 0, j = count - 1; i < count; j = i++) {
+    const T ui = T(poly.vertices[i][poly.axis_u]) - qu;
+    const T vi = T(poly.vertices[i][poly.axis_v]) - qv;
+    const T uj = T(poly.vertices[j][poly.axis_u]) - qu;
+    const T vj = T(poly.vertices[j][poly.axis_v]) - qv;
+    // Half-open in v: a vertex with v == 0 counts as below the 2D ray, so a 2D ray through
+    // a vertex crosses its two edges once in total (or twice / never at a local extreme).
+    // Horizontal edges never count. NaN compares false: no crossing.
+    if ((vi > 0) != (vj > 0)) {
+      // Crossing abscissa u* = (ui vj - vi uj) / (vj - vi); count it iff u* > 0 strictly,
+      // tested by signs so no division rounds the decision.
+      const T num = ui * vj - vi * uj;
+      if (vj > vi ? num > 0 : num < 0) inside = !inside;
+    }
+  }
+  return inside;
+}
+
 /// Intersects `ray` with `poly`, both facings. Hit iff normal.dir != 0 (finite),
 /// t = (d - normal.org) / (normal.dir) satisfies tmin <= t < tmax, and the hit point q lies
 /// inside by the even-odd rule in the plane spanned by axes (axis_u, axis_v). On a hit writes
@@ -64,24 +89,7 @@ bool intersect_polygon(const RayT<T>& ray, const Polygon& poly, T& t) {
   const T qu = q[poly.axis_u];
   const T qv = q[poly.axis_v];
 
-  // Even-odd: count the edges crossed by the 2D ray from q toward +u.
-  bool inside = false;
-  const std::size_t count = poly.vertices.size();
-  for (std::size_t i = 0, j = count - 1; i < count; j = i++) {
-    const T ui = T(poly.vertices[i][poly.axis_u]) - qu;
-    const T vi = T(poly.vertices[i][poly.axis_v]) - qv;
-    const T uj = T(poly.vertices[j][poly.axis_u]) - qu;
-    const T vj = T(poly.vertices[j][poly.axis_v]) - qv;
-    // Half-open in v: a vertex with v == 0 counts as below the 2D ray, so a 2D ray through
-    // a vertex crosses its two edges once in total (or twice / never at a local extreme).
-    // Horizontal edges never count. NaN compares false: no crossing.
-    if ((vi > 0) != (vj > 0)) {
-      // Crossing abscissa u* = (ui vj - vi uj) / (vj - vi); count it iff u* > 0 strictly,
-      // tested by signs so no division rounds the decision.
-      const T num = ui * vj - vi * uj;
-      if (vj > vi ? num > 0 : num < 0) inside = !inside;
-    }
-  }
+  const bool inside = polygon_inside_2d(poly, qu, qv);
   if (!inside) return false;
   t = t_plane;
   return true;

@@ -50,6 +50,33 @@ WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
   return {kx, ky, kz, d[kx] / d[kz], d[ky] / d[kz], T(1) / d[kz]};
 }
 
+/// The crossing rule's side of an edge function that is exactly 0: the sign the edge
+/// function of the edge P -> Q (sheared 2D coordinates, E = Q.x P.y - Q.y P.x at the origin)
+/// takes when the origin moves by an infinitesimal step (1, eta) with 0 < eta << 1: that of
+/// Q.y - P.y, or where those are equal, of P.x - Q.x; 0 for P = Q. Antisymmetric (the edge
+/// Q -> P gets the opposite sign), a function of the two vertices alone (every triangle
+/// sharing the edge sees the same), and the same for both facings (docs/crossings.md).
+template <class T>
+int perturbed_edge_sign(T px, T py, T qx, T qy) {
+  if (qy != py) return qy > py ? 1 : -1;
+  if (qx != px) return px > qx ? 1 : -1;
+  return 0;
+}
+
+/// The crossing rule's inside test (Crossing = true in intersect_watertight): exact edge
+/// functions du, dv, dw of the sheared vertices a, b, c (float products exact in double),
+/// a zero one replaced by perturbed_edge_sign. True iff all three signs are +1 or all -1:
+/// the ray moved by the infinitesimal step passes through the triangle's interior, so a
+/// closed mesh is crossed once at a shared edge or vertex and a silhouette grazed an even
+/// number of times.
+template <class T>
+bool crossing_inside(double du, double dv, double dw, T ax, T ay, T bx, T by, T cx, T cy) {
+  const int su = du > 0 ? 1 : du < 0 ? -1 : perturbed_edge_sign(bx, by, cx, cy);  // edge b -> c
+  const int sv = dv > 0 ? 1 : dv < 0 ? -1 : perturbed_edge_sign(cx, cy, ax, ay);  // edge c -> a
+  const int sw = dw > 0 ? 1 : dw < 0 ? -1 : perturbed_edge_sign(ax, ay, bx, by);  // edge a -> b
+  return su != 0 && su == sv && sv == sw;
+}
+
 /// Intersects `ray` with the triangle (p0, p1, p2), both facings (no culling); `w` must be
 /// make_woop_ray(ray.dir).
 ///
@@ -66,8 +93,12 @@ WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
 /// `Fused`: the shear a[kx] - sx a[kz] and the depth sum U az + V bz + W cz rounded once per
 /// product-and-add (std::fma), as the AVX2 and AVX-512 kernels compute them
 /// (watertight_fused_for); each vertex is still sheared by itself, so nothing cracks.
+/// `Crossing`: the exactly-once rule of the crossing queries (count, all hits, contains):
+/// an edge function that is exactly 0 takes the side of an infinitesimal move of the ray
+/// (crossing_inside) instead of going with either sign, so a ray through a shared edge or
+/// vertex hits exactly one of the triangles there that it crosses (docs/crossings.md).
 /// Pure function, thread safe.
-template <class T, bool Fused = false>
+template <class T, bool Fused = false, bool Crossing = false>
 bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>& p0, const Vec3<T>& p1,
                           const Vec3<T>& p2, TriHit<T>& hit) {
   // Zero-area triangle: no hit (as pbrt-v4). Its sheared vertices are collinear only up to
@@ -101,16 +132,27 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
 
   // A float edge function of exactly 0 may hide a nonzero one: products of floats are exact
   // in double, so recompute there and the sign is exact (paper, section 3.4).
-  if constexpr (std::is_same_v<T, float>) {
-    if (eu == 0 || ev == 0 || ew == 0) {
-      eu = float(double(cx) * double(by) - double(cy) * double(bx));
-      ev = float(double(ax) * double(cy) - double(ay) * double(cx));
-      ew = float(double(bx) * double(ay) - double(by) * double(ax));
+  if constexpr (Crossing) {
+    // Exact signs (in double for float input), a zero one decided by the perturbation.
+    double du = eu, dv = ev, dw = ew;
+    if (std::is_same_v<T, float> && (eu == 0 || ev == 0 || ew == 0)) {
+      du = double(cx) * double(by) - double(cy) * double(bx);
+      dv = double(ax) * double(cy) - double(ay) * double(cx);
+      dw = double(bx) * double(ay) - double(by) * double(ax);
+      eu = T(du), ev = T(dv), ew = T(dw);
     }
+    if (!crossing_inside(du, dv, dw, ax, ay, bx, by, cx, cy)) return false;
+  } else {
+    if constexpr (std::is_same_v<T, float>) {
+      if (eu == 0 || ev == 0 || ew == 0) {
+        eu = float(double(cx) * double(by) - double(cy) * double(bx));
+        ev = float(double(ax) * double(cy) - double(ay) * double(cx));
+        ew = float(double(bx) * double(ay) - double(by) * double(ax));
+      }
+    }
+    // Mixed signs: the origin is outside. Both facings are accepted (no backface culling).
+    if ((eu < 0 || ev < 0 || ew < 0) && (eu > 0 || ev > 0 || ew > 0)) return false;
   }
-
-  // Mixed signs: the origin is outside. Both facings are accepted (no backface culling).
-  if ((eu < 0 || ev < 0 || ew < 0) && (eu > 0 || ev > 0 || ew > 0)) return false;
 
   // det = 0: the ray lies in the triangle's plane. Written so NaN and Inf fail.
   const T det = eu + ev + ew;
@@ -144,9 +186,9 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
 }
 
 /// As above, computing the ray's shear constants on the fly.
-template <class T, bool Fused = false>
+template <class T, bool Fused = false, bool Crossing = false>
 bool intersect_watertight(const RayT<T>& ray, const Vec3<T>& p0, const Vec3<T>& p1, const Vec3<T>& p2, TriHit<T>& hit) {
-  return intersect_watertight<T, Fused>(ray, make_woop_ray(ray.dir), p0, p1, p2, hit);
+  return intersect_watertight<T, Fused, Crossing>(ray, make_woop_ray(ray.dir), p0, p1, p2, hit);
 }
 
 }  // namespace volley::core

@@ -2,12 +2,14 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "volley/options.h"
 #include "volley/packet.h"
+#include "volley/point.h"
 #include "volley/ray.h"
 
 namespace volley {
@@ -192,6 +194,46 @@ class VOLLEY_API Accel {
   /// Error for a null masks with count > 0.
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
+
+  // --- Beyond the first hit (docs/crossings.md) -------------------------------------
+  // Crossing queries count every surface a ray passes through exactly once: with the
+  // watertight test (the default), a ray through an edge or vertex that closed meshes
+  // share hits exactly one of the triangles there, and one grazing a silhouette an even
+  // number (the crossing rule). Möller and plane tests report their own hits, without that rule.
+  // Batches: `threads` = 0 runs on the caller's oneTBB arena (all its threads; the default
+  // arena otherwise), n >= 1 on exactly n threads (1: the calling thread alone).
+
+  /// Every hit along the ray with tmin <= t < tmax, nearest first (ties by geometry, then
+  /// primitive), through the layers `mask` selects: writes the first min(count, capacity)
+  /// into `hits` (null allowed with capacity 0) and returns the count.
+  std::size_t intersect_all(const Ray& ray, Hit* hits, std::size_t capacity, std::uint32_t mask = kMaskAll) const;
+  /// intersect_all over `count` rays into lists (every hit of every ray).
+  HitLists intersect_all(const Ray* rays, std::size_t count, int threads = 0) const;
+  /// The number of hits along the ray (intersect_all's count, no list).
+  std::uint32_t count_intersections(const Ray& ray, std::uint32_t mask = kMaskAll) const;
+  /// count_intersections of `count` rays into counts[0 .. count).
+  void count_intersections(const Ray* rays, std::size_t count, std::uint32_t* counts, int threads = 0) const;
+
+  /// Whether the point lies inside the closed geometry: the parity of the crossings of one
+  /// ray from it (a fixed direction, kContainsDirection), no voting. For geometry that is
+  /// not closed the answer is that ray's parity (it depends on the direction); a point on
+  /// the surface may go either way. NaN or Inf coordinates: false.
+  bool contains(const float point[3]) const;
+  /// contains for `count` points (xyz: 3 floats each): inside[i] = 1 or 0.
+  void contains(const float* xyz, std::size_t count, std::uint8_t* inside, int threads = 0) const;
+  /// The nearest surface point within max_distance (a miss beyond it: ClosestPoint::found()
+  /// is false, distance +inf). Triangles (watertight or Möller test) and polygons; throws
+  /// Error for a scene with instances or built with the plane test.
+  ClosestPoint closest_point(const float point[3], float max_distance = std::numeric_limits<float>::infinity()) const;
+  /// closest_point for `count` points.
+  void closest_points(const float* xyz, std::size_t count, ClosestPoint* out,
+                      float max_distance = std::numeric_limits<float>::infinity(), int threads = 0) const;
+  /// Distance to the surface (+inf for an empty scene). signed_distance: negative inside
+  /// (contains), as Open3D's compute_signed_distance.
+  float distance(const float point[3]) const;
+  float signed_distance(const float point[3]) const;
+  /// distance or signed_distance for `count` points.
+  void distances(const float* xyz, std::size_t count, float* out, bool is_signed, int threads = 0) const;
 
   /// Facts about the committed structure.
   AccelInfo info() const;

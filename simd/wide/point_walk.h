@@ -1,0 +1,144 @@
+// The point query of the wide BVH (closest point, distance, signed distance): children
+// visited nearest box first by their squared box distances, eight at once (Lanes8), a
+// stacked subtree dropped once its box lies beyond the nearest triangle found, and each
+// leaf's blocks answered by core::nearest_on_triangle on the block's lanes.
+#pragma once
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+#include "core/kernel_constants.h"
+#include "core/point_triangle.h"
+#include "simd/wide/node_lanes.h"
+
+namespace volley::simd {
+
+namespace detail {
+
+/// core::nearest_on_triangle's lane operations on xsimd batches.
+template <class Arch>
+struct BatchLaneOps {
+  using B = FloatB<Arch>;
+  using Mask = MaskB<Arch>;
+  static B select(Mask m, B a, B b) { return xsimd::select(m, a, b); }
+  static B clamp01(B x) {
+    const B zero(0.0f), one(1.0f);
+    const B lo = xsimd::select(x > zero, x, zero);
+    return xsimd::select(lo < one, lo, one);
+  }
+  static Mask and_(Mask a, Mask b) { return a & b; }
+};
+
+/// A block's triangles as a vertex and two edges per lane (e1 = b - a, e2 = c - a, rounded
+/// as core::offer_triangle_vertices rounds them), for the tests that keep the vertices.
+template <class Arch, class Block>
+struct BlockEdges {
+  static constexpr bool kHasVertices = false;
+};
+template <class Arch, int W>
+struct BlockEdges<Arch, WatertightBlock<W>> {
+  static constexpr bool kHasVertices = true;
+  using B = FloatB<Arch>;
+  static void lanes(const WatertightBlock<W>& b, B* a, B* e1, B* e2) {
+    for (int k = 0; k < 3; ++k) {
+      a[k] = B::load_aligned(b.p[0][k]);
+      e1[k] = B::load_aligned(b.p[1][k]) - a[k];
+      e2[k] = B::load_aligned(b.p[2][k]) - a[k];
+    }
+  }
+  static void lane(const WatertightBlock<W>& b, int i, float* a, float* e1, float* e2) {
+    for (int k = 0; k < 3; ++k) a[k] = b.p[0][k][i], e1[k] = b.p[1][k][i] - a[k], e2[k] = b.p[2][k][i] - a[k];
+  }
+};
+template <class Arch, int W>
+struct BlockEdges<Arch, MollerBlock<W>> {
+  static constexpr bool kHasVertices = true;
+  using B = FloatB<Arch>;
+  static void lanes(const MollerBlock<W>& b, B* a, B* e1, B* e2) {
+    for (int k = 0; k < 3; ++k) {
+      a[k] = B::load_aligned(b.v0[k]);
+      e1[k] = B::load_aligned(b.e1[k]);
+      e2[k] = -B::load_aligned(b.ne2[k]);
+    }
+  }
+  static void lane(const MollerBlock<W>& b, int i, float* a, float* e1, float* e2) {
+    for (int k = 0; k < 3; ++k) a[k] = b.v0[k][i], e1[k] = b.e1[k][i], e2[k] = -b.ne2[k][i];
+  }
+};
+
+}  // namespace detail
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::closest_point(const View& bvh, core::PointQuery& query) {
+  using Edges = detail::BlockEdges<SingleArch, Block>;
+  if constexpr (!Edges::kHasVertices) {
+    throw std::invalid_argument("point queries need the watertight or Moller triangle test (the plane test's blocks keep no vertices)");
+  } else {
+    using V8 = detail::Lanes8<Arch>;
+    using B = detail::FloatB<SingleArch>;
+    const float* p = query.p;
+    if (bvh.root == wide_ref::kEmptyRef || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return;
+    // A box may be skipped only when it lies surely beyond the nearest triangle: its
+    // squared distance against the bound padded for the rounding of both (a relative
+    // 2^-10, far above the few ulps of either), and never +inf (an unused child).
+    auto bound = [&] { return std::fmin(query.d2 * (1.0f + 0x1p-10f), 0x1.fffffep127f); };
+    const typename V8::V px = V8::set1(p[0]), py = V8::set1(p[1]), pz = V8::set1(p[2]), zero = V8::set1(0.0f);
+    struct Item {
+      std::uint32_t ref;
+      float d2;
+    };
+    Item stack[(kWideN - 1) * core::kBvhMaxDepth + 1];
+    int size = 0;
+    std::uint32_t ref = bvh.root;
+    const B bx(p[0]), by(p[1]), bz(p[2]);
+    for (;;) {
+      if (!(ref & wide_ref::kLeafBit)) {
+        const auto& node = *reinterpret_cast<const WideNode<kWideN>*>(reinterpret_cast<const char*>(bvh.nodes) + ref);
+        auto axis = [&](int a, typename V8::V pa) {
+          const auto d = V8::max(V8::max(V8::sub(V8::load(node.bounds[2 * a]), pa), V8::sub(pa, V8::load(node.bounds[2 * a + 1]))), zero);
+          return V8::mul(d, d);
+        };
+        const auto d2 = V8::add(V8::add(axis(0, px), axis(1, py)), axis(2, pz));
+        alignas(32) float dist[8];
+        V8::store(dist, d2);
+        std::uint32_t mask = V8::le(d2, V8::set1(bound()));
+        // Entered children farthest first, so the nearest is popped next.
+        const int base = size;
+        for (; mask != 0; mask &= mask - 1) {
+          const int c = std::countr_zero(mask);
+          int k = size++;
+          for (; k > base && stack[k - 1].d2 < dist[c]; --k) stack[k] = stack[k - 1];
+          stack[k] = {node.child[c], dist[c]};
+        }
+      } else {
+        const std::uint32_t first = ref & wide_ref::kFirstMask;
+        const std::uint32_t count = (ref >> wide_ref::kCountShift) & wide_ref::kCountMask;
+        for (std::uint32_t b = first; b < first + count; ++b) {
+          const Block& block = bvh.blocks[b];
+          B a[3], e1[3], e2[3];
+          Edges::lanes(block, a, e1, e2);
+          const auto r = core::nearest_on_triangle<B, detail::BatchLaneOps<SingleArch>>(
+              bx - a[0], by - a[1], bz - a[2], e1[0], e1[1], e1[2], e2[0], e2[1], e2[2]);
+          std::uint32_t bits = detail::bits_from_mask<SingleArch>(r.d2 < B(query.d2));
+          // The nearer lanes in lane order through the scalar oracle (same operations, so
+          // the same values; it keeps a lane only while it is still nearer).
+          for (; bits != 0; bits &= bits - 1) {
+            const int i = std::countr_zero(bits);
+            float la[3], le1[3], le2[3];
+            Edges::lane(block, i, la, le1, le2);
+            core::offer_triangle(query, la, le1, le2, block.prim[i]);
+          }
+        }
+      }
+      for (;;) {
+        if (size == 0) return;
+        --size;
+        if (stack[size].d2 <= bound()) break;
+      }
+      ref = stack[size].ref;
+    }
+  }
+}
+
+}  // namespace volley::simd
