@@ -51,6 +51,7 @@ const char* volley_status_string(volley_status status) {
     case VOLLEY_ERROR_INVALID_RAY: return "VOLLEY_ERROR_INVALID_RAY";
     case VOLLEY_ERROR_INTERNAL: return "VOLLEY_ERROR_INTERNAL";
     case VOLLEY_ERROR_FILE: return "VOLLEY_ERROR_FILE";
+    case VOLLEY_ERROR_BUFFER_TOO_SMALL: return "VOLLEY_ERROR_BUFFER_TOO_SMALL";
   }
   return "unknown status";
 }

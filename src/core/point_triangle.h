@@ -39,20 +39,22 @@ struct PointTriangle {
 template <class T>
 struct ScalarLaneOps {
   using Mask = bool;
-  static T select(bool m, T a, T b) { return m ? a : b; }
+  [[gnu::always_inline]] static T select(bool m, T a, T b) { return m ? a : b; }
   /// x clamped to [0, 1]; NaN -> 0.
-  static T clamp01(T x) {
+  [[gnu::always_inline]] static T clamp01(T x) {
     const T lo = x > T(0) ? x : T(0);
     return lo < T(1) ? lo : T(1);
   }
-  static bool and_(bool a, bool b) { return a && b; }
+  [[gnu::always_inline]] static bool and_(bool a, bool b) { return a && b; }
 };
 
 /// Nearest point of the triangle (a, a + e1, a + e2) to a + w, per lane: w = p - a, e1 =
 /// b - a, e2 = c - a as the caller computed them (the SIMD blocks and the oracle round
 /// them alike). Ops: ScalarLaneOps or the SIMD twin.
+/// Always inlined: the per-ISA kernels call it, and an out-of-line copy would be a weak
+/// symbol shared with baseline code (docs/style.md rule 2).
 template <class V, class Ops>
-PointTriangle<V> nearest_on_triangle(V wx, V wy, V wz, V e1x, V e1y, V e1z, V e2x, V e2y, V e2z) {
+[[gnu::always_inline]] inline PointTriangle<V> nearest_on_triangle(V wx, V wy, V wz, V e1x, V e1y, V e1z, V e2x, V e2y, V e2z) {
   const V d00 = e1x * e1x + e1y * e1y + e1z * e1z;
   const V d01 = e1x * e2x + e1y * e2y + e1z * e2z;
   const V d11 = e2x * e2x + e2y * e2y + e2z * e2z;
@@ -94,7 +96,7 @@ PointTriangle<V> nearest_on_triangle(V wx, V wy, V wz, V e1x, V e1y, V e1z, V e2
 /// kept when strictly nearer than query.d2 (the nearest point a + u e1 + v e2). Returns
 /// whether it was kept.
 template <class T>
-bool offer_triangle(PointQuery& query, const T* a, const T* e1, const T* e2, std::uint32_t prim) {
+[[gnu::always_inline]] inline bool offer_triangle(PointQuery& query, const T* a, const T* e1, const T* e2, std::uint32_t prim) {
   const T wx = T(query.p[0]) - a[0], wy = T(query.p[1]) - a[1], wz = T(query.p[2]) - a[2];
   const PointTriangle<T> r =
       nearest_on_triangle<T, ScalarLaneOps<T>>(wx, wy, wz, e1[0], e1[1], e1[2], e2[0], e2[1], e2[2]);

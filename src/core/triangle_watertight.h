@@ -57,7 +57,7 @@ WoopRay<T> make_woop_ray(const Vec3<T>& dir) {
 /// Q -> P gets the opposite sign), a function of the two vertices alone (every triangle
 /// sharing the edge sees the same), and the same for both facings (docs/crossings.md).
 template <class T>
-int perturbed_edge_sign(T px, T py, T qx, T qy) {
+[[gnu::always_inline]] inline int perturbed_edge_sign(T px, T py, T qx, T qy) {
   if (qy != py) return qy > py ? 1 : -1;
   if (qx != px) return px > qx ? 1 : -1;
   return 0;
@@ -69,8 +69,9 @@ int perturbed_edge_sign(T px, T py, T qx, T qy) {
 /// the ray moved by the infinitesimal step passes through the triangle's interior, so a
 /// closed mesh is crossed once at a shared edge or vertex and a silhouette grazed an even
 /// number of times.
+/// Always inlined (the per-ISA kernels call it: docs/style.md rule 2).
 template <class T>
-bool crossing_inside(double du, double dv, double dw, T ax, T ay, T bx, T by, T cx, T cy) {
+[[gnu::always_inline]] inline bool crossing_inside(double du, double dv, double dw, T ax, T ay, T bx, T by, T cx, T cy) {
   const int su = du > 0 ? 1 : du < 0 ? -1 : perturbed_edge_sign(bx, by, cx, cy);  // edge b -> c
   const int sv = dv > 0 ? 1 : dv < 0 ? -1 : perturbed_edge_sign(cx, cy, ax, ay);  // edge c -> a
   const int sw = dw > 0 ? 1 : dw < 0 ? -1 : perturbed_edge_sign(ax, ay, bx, by);  // edge a -> b

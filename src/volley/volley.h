@@ -73,9 +73,10 @@ typedef enum volley_status {
   VOLLEY_ERROR_OUT_OF_MEMORY = 6,    /**< an allocation failed */
   VOLLEY_ERROR_INVALID_RAY = 7,      /**< from volley_validate_rays only: a ray that can never hit */
   VOLLEY_ERROR_INTERNAL = 8,         /**< anything else: a bug in volley, please report it */
-  VOLLEY_ERROR_FILE = 9              /**< a structure file could not be written or read, or is not valid: missing,
+  VOLLEY_ERROR_FILE = 9,             /**< a structure file could not be written or read, or is not valid: missing,
                                           not a volley file, another format version, truncated, corrupted,
                                           inconsistent, or built for an ISA this CPU lacks (the message says which) */
+  VOLLEY_ERROR_BUFFER_TOO_SMALL = 10 /**< volley_intersect_all: more hits than the buffer holds (the count was written) */
 } volley_status;
 
 /** Ray/triangle test, fixed at commit (same as volley::TriangleTest). */
@@ -424,5 +425,7 @@ VOLLEY_API volley_status volley_validate_rays(const volley_ray* rays, size_t cou
 
 /* The query forms with a ray mask. */
 #include "volley/volley_masked.h"
+/* Queries beyond the first hit: all hits, counts, inside/outside, closest points. */
+#include "volley/volley_queries.h"
 
 #endif /* VOLLEY_VOLLEY_H */

@@ -78,7 +78,8 @@ TEST_CASE("points: every ISA's closest points are the scalar oracle's, and withi
     std::vector<ClosestPoint> want(n);
     oracle.closest_points(xyz.data(), n, want.data());
     // Against double: |d - d_ref| <= 8 eps (d_ref + scale), scale = the farthest vertex of
-    // the nearest triangle from the point (the rounding of p - a and of the edges).
+    // the nearest triangle from the point over the sine of its angle at the first vertex
+    // (measured: 1.14 eps on these points).
     double worst = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const Reference r = brute_force(soup, &xyz[3 * i]);

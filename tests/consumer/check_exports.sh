@@ -36,7 +36,7 @@ fi
 # Every function volley.h (and the volley_masked.h it includes) declares must be there (a
 # missing VOLLEY_API or map entry).
 missing=""
-for f in $(cat "$header" "$(dirname "$header")/volley_masked.h" | grep -oE 'VOLLEY_API [^(]*\bvolley_[a-z0-9_]+\(' |
+for f in $(cat "$header" "$(dirname "$header")/volley_masked.h" "$(dirname "$header")/volley_queries.h" | grep -oE 'VOLLEY_API [^(]*\bvolley_[a-z0-9_]+\(' |
            grep -oE 'volley_[a-z0-9_]+\($' | tr -d '('); do
   printf '%s\n' "$symbols" | grep -qx "$f" || missing="$missing $f"
 done

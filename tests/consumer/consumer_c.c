@@ -429,6 +429,7 @@ int main(void) {
   check_save_load();
   check_masks();
   check_instances();
+  check_queries();
   if (failures) {
     printf("consumer_c: %d failures\n", failures);
     return 1;

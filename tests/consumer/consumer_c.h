@@ -17,4 +17,7 @@ void check_save_load(void);
 void check_masks(void);
 void check_instances(void);
 
+/* consumer_c_queries.c */
+void check_queries(void);
+
 #endif
