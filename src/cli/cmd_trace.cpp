@@ -5,10 +5,11 @@
 //
 //   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
 //          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N robust=0|1
-//          reference=0|1 mask=M|none                                        (one line)
+//          reference=0|1 mask=M|none query=closest|occluded|count|all       (one line)
 //
 // packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
-// hits counts closest hits, or blocked rays with --occluded; robust=0 with --fast-slabs,
+// hits counts closest hits, blocked rays with --occluded, or every hit (crossings) with
+// --count and --all; robust=0 with --fast-slabs,
 // reference=1 with --reference, mask the --mask the rays were traced with. Keys are only
 // ever added.
 #include <algorithm>
@@ -18,6 +19,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -28,6 +30,7 @@
 
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "io/query_files.h"
 #include "io/ray_file.h"
 #include "io/scene_loader.h"
 #include "render/scene.h"
@@ -45,6 +48,8 @@ struct TraceArgs {
   std::string load;  ///< map the structure from here instead of building it
   std::optional<std::uint32_t> mask;  ///< the rays' mask (the masked query forms)
   bool occluded = false;
+  bool count = false;  ///< --count: crossings per ray (.vcnt)
+  bool all = false;    ///< --all: every hit per ray (.vall)
   std::string mode = "single";
   int packet = 16;
   int threads = 0;
@@ -57,11 +62,34 @@ struct TraceArgs {
 constexpr std::size_t kChunk = 1024;
 static_assert(kChunk % 16 == 0, "chunks hold whole packets");
 
-/// The answers of one pass: closest hits, or one byte per ray for occlusion.
+/// The answers of one pass: closest hits, one byte per ray for occlusion, crossings per
+/// ray (--count), or every hit per ray (--all).
 struct Answers {
   std::vector<Hit> hits;
   std::vector<std::uint8_t> blocked;
+  std::vector<std::uint32_t> counts;
+  std::vector<std::vector<Hit>> lists;
 };
+
+/// The crossing queries, ray by ray (they have no packet forms): counts or hit lists.
+void trace_crossings(const Accel& accel, const Ray* r, const std::uint32_t* masks, std::size_t begin, std::size_t end,
+                     Answers& out) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const std::uint32_t mask = masks ? masks[i] : kMaskAll;
+    if (out.lists.empty()) {
+      out.counts[i] = accel.count_intersections(r[i], mask);
+      continue;
+    }
+    std::vector<Hit>& list = out.lists[i];
+    list.resize(list.capacity() > 8 ? list.capacity() : 8);
+    const std::size_t n = accel.intersect_all(r[i], list.data(), list.size(), mask);
+    if (n > list.size()) {
+      list.resize(n);
+      accel.intersect_all(r[i], list.data(), n, mask);
+    }
+    list.resize(n);
+  }
+}
 
 /// Traces rays[begin, end) into `out` (the same indices).
 using ChunkTracer = std::function<void(std::size_t begin, std::size_t end, Answers& out)>;
@@ -88,8 +116,12 @@ void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* mas
 
 /// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms.
 ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
-                        const std::string& mode, int packet, bool occluded) {
+                        const std::string& mode, int packet, bool occluded, bool crossings) {
   const Ray* r = rays.data();
+  if (crossings)
+    return [&accel, r, masks](std::size_t begin, std::size_t end, Answers& out) {
+      trace_crossings(accel, r, masks, begin, end, out);
+    };
   if (mode == "packet") {
     return [&accel, r, masks, packet, occluded](std::size_t begin, std::size_t end, Answers& out) {
       if (packet == 4) trace_packets<4>(accel, r, masks, begin, end, occluded, out);
@@ -146,8 +178,15 @@ Runner register_trace(CLI::App& app) {
       "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
   cmd->add_option("scene", args->scene, "Scene file (.json) or mesh (.obj, .ply)")->required();
   cmd->add_option("--rays", args->rays, "Ray file (.vray) from `volley rays`")->required();
-  cmd->add_option("-o,--output", args->output, "Write the answers as a hit file (.vhit)");
-  cmd->add_flag("--occluded", args->occluded, "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
+  cmd->add_option("-o,--output", args->output, "Write the answers: a hit file (.vhit), or .vcnt / .vall with --count / --all");
+  auto* occluded = cmd->add_flag("--occluded", args->occluded, "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
+  auto* count = cmd->add_flag("--count", args->count,
+                              "Count every hit along each ray (crossings, each shared edge or vertex once: docs/crossings.md);\n"
+                              "-o writes a count file (.vcnt). Single rays only");
+  cmd->add_flag("--all", args->all, "Every hit along each ray, nearest first; -o writes a hit-list file (.vall). Single rays only")
+      ->excludes(occluded)
+      ->excludes(count);
+  count->excludes(occluded);
   cmd->add_option("--mode", args->mode, "single (one ray at a time), packet (SoA packets of consecutive rays), stream")
       ->check(CLI::IsMember({"single", "packet", "stream"}))
       ->capture_default_str();
@@ -172,6 +211,9 @@ Runner register_trace(CLI::App& app) {
 
   return [args]() {
     const TraceArgs& a = *args;
+    const bool crossings = a.count || a.all;
+    if (crossings && a.mode != "single")
+      throw std::invalid_argument("--count and --all trace single rays: leave --mode at single (they have no packet or stream forms)");
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
     const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel), a.load);
@@ -182,10 +224,14 @@ Runner register_trace(CLI::App& app) {
     const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const std::vector<std::uint32_t> masks(a.mask ? rays.size() : 0, a.mask.value_or(kMaskAll));
-    const ChunkTracer trace = make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded);
+    const ChunkTracer trace =
+        make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded, crossings);
     Answers answers;
     if (a.occluded) answers.blocked.assign(rays.size(), 0);
+    else if (a.count) answers.counts.assign(rays.size(), 0);
+    else if (a.all) answers.lists.resize(rays.size());
     else answers.hits.assign(rays.size(), Hit{});
+    const char* query = a.occluded ? "occluded" : a.count ? "count" : a.all ? "all" : "closest";
 
     std::vector<double> seconds;
     for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers));
@@ -196,6 +242,9 @@ Runner register_trace(CLI::App& app) {
     std::size_t hit_count = 0;
     if (a.occluded) {
       for (std::uint8_t b : answers.blocked) hit_count += b;
+    } else if (crossings) {
+      for (std::uint32_t c : answers.counts) hit_count += c;
+      for (const std::vector<Hit>& l : answers.lists) hit_count += l.size();
     } else {
       for (const Hit& h : answers.hits) hit_count += h.hit() ? 1 : 0;
     }
@@ -205,27 +254,41 @@ Runner register_trace(CLI::App& app) {
     const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
     std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s\n",
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s\n",
                 a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
                 a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
-                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none");
+                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query);
+    char found[96];
+    const double share = rays.empty() ? 0.0 : double(hit_count) / double(rays.size());
+    if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);
+    else std::snprintf(found, sizeof found, "%zu %s (%.1f%%)", hit_count, a.occluded ? "blocked" : "hit", 100.0 * share);
     std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
-                "%.2f Mrays/s; %zu %s (%.1f%%); %s %.3f s\n",
-                a.scene.c_str(), rays.size(), a.rays.c_str(), a.occluded ? "occlusion" : "closest hit", mode.c_str(),
+                "%.2f Mrays/s; %s; %s %.3f s\n",
+                a.scene.c_str(), rays.size(), a.rays.c_str(),
+                a.occluded ? "occlusion" : a.count ? "crossing count" : a.all ? "all hits" : "closest hit", mode.c_str(),
                 test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
-                hit_count, a.occluded ? "blocked" : "hit", rays.empty() ? 0.0 : 100.0 * double(hit_count) / double(rays.size()),
-                info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
+                found, info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
     if (!a.save.empty()) std::printf("saved the structure to %s\n", a.save.c_str());
 
     if (!a.output.empty()) {
-      if (a.occluded) {
+      if (a.count) {
+        io::write_counts(a.output, answers.counts);
+      } else if (a.all) {
+        HitLists lists;
+        lists.offsets.push_back(0);
+        for (const std::vector<Hit>& l : answers.lists) {
+          lists.hits.insert(lists.hits.end(), l.begin(), l.end());
+          lists.offsets.push_back(lists.hits.size());
+        }
+        io::write_hit_lists(a.output, lists);
+      } else if (a.occluded) {
         std::vector<Hit> records(rays.size());
         for (std::size_t i = 0; i < rays.size(); ++i) records[i] = io::occlusion_record(answers.blocked[i] != 0);
         io::write_hits(a.output, records);
       } else {
         io::write_hits(a.output, answers.hits);
       }
-      std::printf("hits -> %s\n", a.output.c_str());
+      std::printf("answers -> %s\n", a.output.c_str());
     }
     return 0;
   };

@@ -24,6 +24,8 @@ void register_commands(CLI::App& app) {
   add(app, register_info);
   add(app, register_rays);
   add(app, register_trace);
+  add(app, register_points);
+  add(app, register_query);
   add(app, register_accuracy);
 }
 

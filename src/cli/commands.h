@@ -21,5 +21,7 @@ Runner register_info(CLI::App& app);
 Runner register_rays(CLI::App& app);
 Runner register_trace(CLI::App& app);
 Runner register_accuracy(CLI::App& app);
+Runner register_points(CLI::App& app);
+Runner register_query(CLI::App& app);
 
 }  // namespace volley::cli

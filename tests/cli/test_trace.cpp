@@ -29,27 +29,13 @@ using namespace volley;
 
 namespace {
 
+using test::has;
 using test::Run;
 using test::run;
-
-fs::path temp_path(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / "volley_trace_test";
-  fs::create_directories(dir);
-  return dir / name;
-}
-
-fs::path temp_file(const std::string& name, const std::string& content) {
-  const fs::path p = temp_path(name);
-  std::ofstream(p, std::ios::binary) << content;
-  return p;
-}
-
-std::string bytes_of(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using test::temp_file;
+using test::temp_path;
+using test::trace_line;
+using test::bytes_of;
 
 const std::string kCornell = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
 
@@ -61,19 +47,6 @@ const std::string kFloor = R"({"camera": {"eye": [0, 5, 0], "look_at": [0, 0, 0]
   "lights": [{"position": [1, 4, 2], "intensity": 30}],
   "objects": [{"type": "triangles", "vertices": [[-10,0,-10],[10,0,-10],[10,0,10],[-10,0,10]],
                "indices": [[0,2,1],[0,3,2]], "material": "grey"}]})";
-
-// The parsed `trace: key=value ...` line.
-std::map<std::string, std::string> trace_line(const std::string& output) {
-  std::map<std::string, std::string> kv;
-  const std::regex line(R"(^trace: (.*)$)", std::regex::multiline);
-  std::smatch m;
-  if (!std::regex_search(output, m, line)) return kv;
-  const std::string fields = m[1];
-  const std::regex pair(R"((\S+)=(\S+))");
-  for (auto it = std::sregex_iterator(fields.begin(), fields.end(), pair); it != std::sregex_iterator(); ++it)
-    kv[(*it)[1]] = (*it)[2];
-  return kv;
-}
 
 render::Scene load_scene(const std::string& file, int width, int height) {
   return render::Scene(io::load_scene(file, VOLLEY_SHARED_SCENES), width, height, Options{});
