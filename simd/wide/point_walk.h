@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/kernel_constants.h"
+#include "core/bvh_nearest.h"
 #include "core/point_triangle.h"
 #include "simd/wide/node_lanes.h"
 
@@ -82,7 +83,7 @@ void WideKernels<Arch, Test, Robust>::closest_point(const View& bvh, core::Point
     // A box may be skipped only when it lies surely beyond the nearest triangle: its
     // squared distance against the bound padded for the rounding of both (a relative
     // 2^-10, far above the few ulps of either), and never +inf (an unused child).
-    auto bound = [&] { return std::fmin(query.d2 * (1.0f + 0x1p-10f), 0x1.fffffep127f); };
+    auto bound = [&] { return core::nearest_bound(query.d2); };
     const typename V8::V px = V8::set1(p[0]), py = V8::set1(p[1]), pz = V8::set1(p[2]), zero = V8::set1(0.0f);
     struct Item {
       std::uint32_t ref;
@@ -118,12 +119,27 @@ void WideKernels<Arch, Test, Robust>::closest_point(const View& bvh, core::Point
           const Block& block = bvh.blocks[b];
           B a[3], e1[3], e2[3];
           Edges::lanes(block, a, e1, e2);
+          // The triangles' boxes first: a block whose every triangle lies beyond the bound
+          // (most, once a near triangle is known) costs no distance computation.
+          const B zero_b(0.0f);
+          B box2 = zero_b;
+          const B pb[3] = {bx, by, bz};
+          for (int k = 0; k < 3; ++k) {
+            const B bk = a[k] + e1[k], ck = a[k] + e2[k];
+            const B lo = xsimd::min(a[k], xsimd::min(bk, ck)), hi = xsimd::max(a[k], xsimd::max(bk, ck));
+            const B d = xsimd::max(xsimd::max(lo - pb[k], pb[k] - hi), zero_b);
+            box2 = box2 + d * d;
+          }
+          if (xsimd::none(box2 <= B(bound()))) continue;
           const auto r = core::nearest_on_triangle<B, detail::BatchLaneOps<SingleArch>>(
               bx - a[0], by - a[1], bz - a[2], e1[0], e1[1], e1[2], e2[0], e2[1], e2[2]);
-          std::uint32_t bits = detail::bits_from_mask<SingleArch>(r.d2 < B(query.d2));
-          // The nearer lanes in lane order through the scalar oracle (same operations, so
-          // the same values; it keeps a lane only while it is still nearer).
-          for (; bits != 0; bits &= bits - 1) {
+          // The nearest lane (the first of equals: what offering the lanes in order keeps)
+          // through the scalar oracle, which recomputes it with the same operations (the
+          // same values) and fills in the point and barycentrics.
+          const B nearer = xsimd::select(r.d2 < B(query.d2), r.d2, B(INFINITY));  // NaN (padding) out
+          const std::uint32_t bits = detail::bits_from_mask<SingleArch>(nearer == B(detail::reduce_min<SingleArch>(nearer))) &
+                                     detail::bits_from_mask<SingleArch>(nearer < B(query.d2));
+          if (bits != 0) {
             const int i = std::countr_zero(bits);
             float la[3], le1[3], le2[3];
             Edges::lane(block, i, la, le1, le2);

@@ -2,6 +2,9 @@
 // threads (the caller's oneTBB arena, or an arena of the thread count asked for), each
 // element answered by the single form.
 #include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -32,6 +35,73 @@ void for_chunks(const char* caller, std::size_t count, int threads, Body&& body)
     arena.execute(run);
   }
 }
+
+/// The points' indices in Morton (Z-curve) order of their positions in the points' box, 10
+/// bits per axis: neighbours in the order are neighbours in space, so consecutive queries
+/// walk the same nodes (cache) and each can start from its predecessor's answer. Non-finite
+/// points go last. Two 16-bit radix passes.
+std::vector<std::uint32_t> morton_order(const float* xyz, std::size_t n) {
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a)
+      if (std::isfinite(xyz[3 * i + a])) lo[a] = std::min(lo[a], xyz[3 * i + a]), hi[a] = std::max(hi[a], xyz[3 * i + a]);
+  auto spread = [](std::uint32_t x) {  // 10 bits -> every third bit
+    x = (x | (x << 16)) & 0x030000ffu;
+    x = (x | (x << 8)) & 0x0300f00fu;
+    x = (x | (x << 4)) & 0x030c30c3u;
+    return (x | (x << 2)) & 0x09249249u;
+  };
+  std::vector<std::uint32_t> code(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t c = 0;
+    bool finite = true;
+    for (int a = 0; a < 3; ++a) {
+      const float x = xyz[3 * i + a];
+      finite = finite && std::isfinite(x);
+      const float f = hi[a] > lo[a] ? (x - lo[a]) / (hi[a] - lo[a]) : 0.0f;
+      const std::uint32_t q = f > 0.0f ? (f < 1.0f ? std::uint32_t(f * 1023.0f) : 1023u) : 0u;
+      c |= spread(q) << a;
+    }
+    code[i] = finite ? c : 0xffffffffu;
+  }
+  std::vector<std::uint32_t> order(n), tmp(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+  for (int shift : {0, 16}) {
+    std::vector<std::size_t> count(65537, 0);
+    for (std::uint32_t i : order) ++count[((code[i] >> shift) & 0xffffu) + 1];
+    for (std::size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+    for (std::uint32_t i : order) tmp[count[(code[i] >> shift) & 0xffffu]++] = i;
+    order.swap(tmp);
+  }
+  return order;
+}
+
+/// closest_point of point p, its search first bounded by the previous point's answer (the
+/// distance from p to that surface point, padded: the nearest triangle is within it, so
+/// the answer is the unbounded one), then unbounded should that find nothing.
+}  // namespace
+
+ClosestPoint Accel::Impl::closest_after(const float* p, float max_d2, const ClosestPoint& previous) const {
+  core::PointQuery q;
+  for (int k = 0; k < 3; ++k) q.p[k] = p[k];
+  q.d2 = max_d2;
+  if (previous.found()) {
+    float s = 0.0f;
+    for (int k = 0; k < 3; ++k) s += (p[k] - previous.point[k]) * (p[k] - previous.point[k]);
+    s = s * (1.0f + 0x1p-6f) + std::numeric_limits<float>::min();
+    if (s < q.d2) {
+      q.d2 = s;
+      const ClosestPoint seeded = closest_point(q);
+      if (seeded.found()) return seeded;
+      q = core::PointQuery{};
+      for (int k = 0; k < 3; ++k) q.p[k] = p[k];
+      q.d2 = max_d2;
+    }
+  }
+  return closest_point(q);
+}
+
+namespace {
 
 void require(const char* caller, const void* p, std::size_t count, const char* what) {
   if (!p && count > 0) throw Error(std::string(caller) + ": " + what + " is null with count > 0");
@@ -82,8 +152,10 @@ void Accel::contains(const float* xyz, std::size_t count, std::uint8_t* inside, 
   if (!impl_->committed) throw Error("contains: call commit() after adding geometry");
   require("contains", xyz, count, "xyz");
   require("contains", inside, count, "inside");
+  // In Morton order too: neighbouring rays walk the same nodes.
+  const std::vector<std::uint32_t> order = morton_order(xyz, count);
   for_chunks("contains", count, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) inside[i] = contains(xyz + 3 * i) ? 1 : 0;
+    for (std::size_t k = b; k < e; ++k) inside[order[k]] = contains(xyz + 3 * std::size_t{order[k]}) ? 1 : 0;
   });
 }
 
@@ -92,17 +164,30 @@ void Accel::closest_points(const float* xyz, std::size_t count, ClosestPoint* ou
   if (!impl_->committed) throw Error("closest_points: call commit() after adding geometry");
   require("closest_points", xyz, count, "xyz");
   require("closest_points", out, count, "out");
-  for_chunks("closest_points", count, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) out[i] = closest_point(xyz + 3 * i, max_distance);
-  });
+  if (!(max_distance >= 0.0f)) throw Error("closest_points: max_distance must be >= 0 (+inf for no limit)");
+  impl_->closest_batch(xyz, count, threads, max_distance, [&](std::size_t i, const ClosestPoint& c) { out[i] = c; });
 }
 
 void Accel::distances(const float* xyz, std::size_t count, float* out, bool is_signed, int threads) const {
   if (!impl_->committed) throw Error("distances: call commit() after adding geometry");
   require("distances", xyz, count, "xyz");
   require("distances", out, count, "out");
-  for_chunks("distances", count, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) out[i] = is_signed ? signed_distance(xyz + 3 * i) : distance(xyz + 3 * i);
+  impl_->closest_batch(xyz, count, threads, INFINITY, [&](std::size_t i, const ClosestPoint& c) {
+    out[i] = is_signed && c.distance > 0.0f && contains(xyz + 3 * i) ? -c.distance : c.distance;
+  });
+}
+
+void Accel::Impl::closest_batch(const float* xyz, std::size_t count, int threads, float max_distance,
+                                const std::function<void(std::size_t, const ClosestPoint&)>& out) const {
+  const std::vector<std::uint32_t> order = morton_order(xyz, count);
+  const float max_d2 = max_distance * max_distance;
+  for_chunks("closest_points", count, threads, [&](std::size_t b, std::size_t e) {
+    ClosestPoint previous;
+    for (std::size_t k = b; k < e; ++k) {
+      const std::uint32_t i = order[k];
+      previous = closest_after(xyz + 3 * std::size_t{i}, max_d2, previous);
+      out(i, previous);
+    }
   });
 }
 

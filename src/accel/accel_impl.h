@@ -5,6 +5,7 @@
 // whose mask shares a bit with its own: triangles, then polygons bounded by their hit.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -199,6 +200,12 @@ struct Accel::Impl {
   /// The nearest surface point within sqrt(query.d2) (accel_points.cpp). Throws Error
   /// for instances and the plane test.
   ClosestPoint closest_point(core::PointQuery& query) const;
+  /// closest_point for `count` points (accel_batches.cpp): in Morton order of their
+  /// positions, each search first bounded by its predecessor's answer; out(i, answer).
+  void closest_batch(const float* xyz, std::size_t count, int threads, float max_distance,
+                     const std::function<void(std::size_t, const ClosestPoint&)>& out) const;
+  /// closest_point of p bounded first by the distance to `previous`'s surface point.
+  ClosestPoint closest_after(const float* p, float max_d2, const ClosestPoint& previous) const;
 
  private:
   /// load(): the geometry table into `geometries`, checked against itself and the meta

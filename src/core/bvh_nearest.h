@@ -29,7 +29,10 @@ inline float box_distance2(const BBox& b, const float* p) {
 /// The bound a box's squared distance must not exceed to be entered, given the nearest
 /// squared distance so far: padded by 2^-10 relative (far above the rounding of the box and
 /// triangle distances), and below +inf so an empty box (distance +inf) is never entered.
-inline float nearest_bound(float d2) { return std::fmin(d2 * (1.0f + 0x1p-10f), 0x1.fffffep127f); }
+inline float nearest_bound(float d2) {
+  const float b = d2 * (1.0f + 0x1p-10f);
+  return b < 0x1.fffffep127f ? b : 0x1.fffffep127f;  // (not std::fmin: a libm call)
+}
 
 /// Calls leaf(prim) for the primitives of every leaf whose box lies within the bound of
 /// query.d2 (which leaf lowers), nearest box first. A non-finite point visits nothing.

@@ -8,8 +8,8 @@
 // inside the triangle the distance is |w.n| / |n| (n = e1 x e2: no cancellation of the
 // in-plane part); outside, the nearest of the three edges as clamped segments (ab, ac, bc).
 // Branch-free: every candidate is computed and the nearest selected, so a lane's answer
-// does not depend on its neighbours. A zero-area triangle has no interior (its barycentrics
-// are NaN) and is answered by its edges; NaN vertices (a block's padding) give NaN, which
+// does not depend on its neighbours. A zero-area triangle has no interior (den = 0) and is
+// answered by its edges; NaN vertices (a block's padding) give NaN, which
 // never wins a comparison.
 #pragma once
 #include <cmath>
@@ -60,11 +60,13 @@ template <class V, class Ops>
   const V d11 = e2x * e2x + e2y * e2y + e2z * e2z;
   const V d20 = wx * e1x + wy * e1y + wz * e1z;
   const V d21 = wx * e2x + wy * e2y + wz * e2z;
-  // Interior: barycentrics of the projection, and the distance to the plane.
+  // Interior: the projection inside by its barycentrics' numerators (den > 0: a proper
+  // triangle), so only the answer's u, v are divided (the SIMD lanes, which read d2 alone,
+  // drop those divisions); the distance to the plane.
   const V den = d00 * d11 - d01 * d01;
-  const V bu = (d11 * d20 - d01 * d21) / den;
-  const V bv = (d00 * d21 - d01 * d20) / den;
-  const auto inside = Ops::and_(Ops::and_(bu >= V(0), bv >= V(0)), bu + bv <= V(1));
+  const V nu = d11 * d20 - d01 * d21, nv = d00 * d21 - d01 * d20;
+  const auto inside = Ops::and_(Ops::and_(den > V(0), Ops::and_(nu >= V(0), nv >= V(0))), nu + nv <= den);
+  const V bu = nu / den, bv = nv / den;
   const V nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
   const V wn = wx * nx + wy * ny + wz * nz;
   const V plane_d2 = wn * wn / (nx * nx + ny * ny + nz * nz);
