@@ -51,8 +51,10 @@ void RayBlockKernels<Arch, Test>::all_inline(const PreparedRay& ray, const Block
   const B upper(ray.ray.tmax);
   const float tmin = ray.ray.tmin, tmax = ray.ray.tmax;
   for (std::uint32_t b = 0; b < count; ++b) {
-    const typename T::Cand cand = T::template test<true>(rays, T::load_block(blocks[b], rays), upper);
-    std::uint32_t bits = detail::bits_from_mask<Arch>(cand.valid);
+    // The walk's leaf form (no early exit: leaves near the ray; AVX-512VL's mask registers).
+    typename T::Cand cand;
+    std::uint32_t bits;
+    detail::BlockTest<Arch, T, false>::run(rays, blocks[b], upper, cand, bits);
     if (bits == 0) continue;
     alignas(64) float ts[W], us[W], vs[W], dens[W];
     cand.t.store_aligned(ts);

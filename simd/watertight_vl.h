@@ -13,11 +13,12 @@
 
 namespace volley::simd::detail {
 
-/// BlockTest for the walk's leaves (EarlyExit = false) of the watertight test on Avx512Ymm.
-template <class Arch>
+/// BlockTest for the walk's leaves (EarlyExit = false) of the watertight test on Avx512Ymm,
+/// with or without the crossing rule (which only the fallback's lanes differ by).
+template <class Arch, bool Crossing>
   requires std::is_same_v<Arch, Avx512Ymm>
-struct BlockTest<Arch, WatertightTest<Arch>, false> {
-  using T = WatertightTest<Arch>;
+struct BlockTest<Arch, WatertightTest<Arch, Crossing>, false> {
+  using T = WatertightTest<Arch, Crossing>;
   using B = typename T::B;
 
   [[gnu::always_inline]] inline static void run(const typename T::Rays& r, const typename T::Block& block, B upper,

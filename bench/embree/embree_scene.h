@@ -28,6 +28,7 @@ namespace volley::bench {
 struct EmbreeConfig {
   RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  ///< Embree's default; HIGH = spatial splits
   bool robust = false;                                 ///< RTC_SCENE_FLAG_ROBUST (else NONE)
+  bool context_filter = false;                         ///< RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION (count_modes.h)
   std::string device_config;                           ///< rtcNewDevice string, e.g. "threads=1"
 };
 
@@ -131,7 +132,8 @@ class EmbreeScene {
  private:
   RTCScene new_scene(const EmbreeConfig& config) const {
     RTCScene scene = rtcNewScene(device_);
-    rtcSetSceneFlags(scene, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneFlags(scene, RTCSceneFlags((config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE) |
+                                          (config.context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0)));
     rtcSetSceneBuildQuality(scene, config.quality);
     return scene;
   }

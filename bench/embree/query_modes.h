@@ -23,10 +23,12 @@ inline constexpr std::size_t kStreamChunk = 1024;
 /// Embree's tfar of an occluded ray.
 inline constexpr float kNegInf = -std::numeric_limits<float>::infinity();
 
-/// The answers of one pass: closest hits, or one byte per ray for occlusion.
+/// The answers of one pass: closest hits, one byte per ray for occlusion, or hits per ray
+/// (the counting modes, count_modes.h).
 struct Answers {
   std::vector<Hit> hits;
   std::vector<std::uint8_t> blocked;
+  std::vector<std::uint32_t> counts;
 };
 
 /// One mode: the same query through each engine's matching call.
@@ -37,6 +39,7 @@ struct Mode {
   bool occlusion = false;
   std::function<void(const std::vector<Ray>&, Answers&)> embree;
   std::function<void(const std::vector<Ray>&, Answers&)> volley;
+  bool counting = false;  ///< answers are counts per ray
 };
 
 inline RTCIntersectContext make_context(bool coherent) {

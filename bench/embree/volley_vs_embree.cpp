@@ -33,6 +33,7 @@
 
 #include "embree_scene.h"
 #include "embree_scene_of.h"
+#include "count_modes.h"
 #include "query_modes.h"
 #include "io/load_error.h"
 #include "io/ray_file.h"
@@ -93,10 +94,16 @@ double best(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_e
 double mrays(std::size_t rays, double seconds) { return seconds > 0.0 ? double(rays) / seconds * 1e-6 : 0.0; }
 
 void compare(Result& r) {
-  const std::size_t n = r.mode->occlusion ? r.volley_answers.blocked.size() : r.volley_answers.hits.size();
+  const std::size_t n = r.mode->counting    ? r.volley_answers.counts.size()
+                        : r.mode->occlusion ? r.volley_answers.blocked.size()
+                                            : r.volley_answers.hits.size();
   std::size_t same = 0, both = 0, same_prim = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (r.mode->occlusion) {
+    if (r.mode->counting) {
+      same += r.embree_answers.counts[i] == r.volley_answers.counts[i];
+      r.embree_hits += r.embree_answers.counts[i];
+      r.volley_hits += r.volley_answers.counts[i];
+    } else if (r.mode->occlusion) {
       const bool e = r.embree_answers.blocked[i] != 0, v = r.volley_answers.blocked[i] != 0;
       same += e == v;
       r.embree_hits += e;
@@ -199,6 +206,7 @@ int run(const Args& a) {
   config.quality = a.quality == "high" ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
   config.robust = a.robust;
   config.device_config = a.embree_config;
+  config.context_filter = a.modes.find("count") != std::string::npos || a.modes.find("all") != std::string::npos;
   const EmbreeScene embree = embree_scene_of(desc, a.scene, config);
 
   // Flush-to-zero and denormals-are-zero, as Embree asks of every thread that traces
@@ -207,6 +215,7 @@ int run(const Args& a) {
   if (!a.no_ftz) _mm_setcsr(_mm_getcsr() | 0x8040u);
 
   std::vector<Mode> modes = all_modes(embree, accel, a.coherent);
+  add_count_modes(modes, embree, accel, a.coherent);
   std::vector<Result> results;
   std::stringstream wanted(a.modes);
   for (std::string name; std::getline(wanted, name, ',');) {
@@ -215,7 +224,8 @@ int run(const Args& a) {
     Result r;
     r.mode = &*m;
     for (Answers* ans : {&r.embree_answers, &r.volley_answers}) {
-      if (m->occlusion) ans->blocked.assign(rays.size(), 0);
+      if (m->counting) ans->counts.assign(rays.size(), 0);
+      else if (m->occlusion) ans->blocked.assign(rays.size(), 0);
       else ans->hits.assign(rays.size(), Hit{});
     }
     results.push_back(std::move(r));
@@ -258,8 +268,8 @@ int run(const Args& a) {
     std::printf("%-16s %-15s %10.2f %10.2f   %-26s %10.2f %10.2f   %6.3fx  %.4f%% %s", r.mode->name.c_str(),
                 r.mode->embree_call.c_str(), e, mrays(rays.size(), median(r.embree_s)), r.mode->volley_call.c_str(), v,
                 mrays(rays.size(), median(r.volley_s)), e > 0 ? v / e : 0.0, 100.0 * r.agreement,
-                r.mode->occlusion ? "blocked/free" : "hit/miss");
-    if (!r.mode->occlusion) std::printf(", prim %.4f%%", 100.0 * r.prim_agreement);
+                r.mode->counting ? "same count" : r.mode->occlusion ? "blocked/free" : "hit/miss");
+    if (!r.mode->occlusion && !r.mode->counting) std::printf(", prim %.4f%%", 100.0 * r.prim_agreement);
     std::printf("\n");
   }
   if (a.show_differences > 0)
@@ -318,7 +328,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", a.seed, "Seed for --workload diffuse (default: the scene's)")->check(CLI::NonNegativeNumber);
   app.add_option("--modes", a.modes,
                  "Comma-separated: single (rtcIntersect1), packet (rtcIntersect16), stream (rtcIntersect1M), "
-                 "occluded1, occluded16, occluded_stream")
+                 "occluded1, occluded16, occluded_stream; count1, count16, all1 (every hit: Embree through an intersection\n"
+                 "filter that records and rejects each hit; its scene then has the context-filter flag)")
       ->capture_default_str();
   app.add_option("--reps", a.reps, "Repetitions per engine and mode (alternating)")->check(CLI::Range(1, 100000))->capture_default_str();
   app.add_option("--quality", a.quality, "Embree build quality")->check(CLI::IsMember({"medium", "high"}))->capture_default_str();
