@@ -156,4 +156,21 @@ std::vector<Ray> closed_mesh_rays(const ClosedMesh& c, float offset, std::size_t
   return rays;
 }
 
+double winding_number(const Mesh& m, const std::array<double, 3>& p) {
+  double sum = 0.0;
+  for (std::size_t t = 0; t < m.triangles(); ++t) {
+    double v[3][3];
+    for (int k = 0; k < 3; ++k) {
+      const auto c = m.corner(std::uint32_t(t), k);
+      for (int a = 0; a < 3; ++a) v[k][a] = c[a] - p[a];
+    }
+    auto dot = [&](int i, int j) { return v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2]; };
+    const double la = std::sqrt(dot(0, 0)), lb = std::sqrt(dot(1, 1)), lc = std::sqrt(dot(2, 2));
+    const double det = v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0]) +
+                       v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0]);
+    sum += 2.0 * std::atan2(det, la * lb * lc + dot(0, 1) * lc + dot(0, 2) * lb + dot(1, 2) * la);
+  }
+  return sum / (4.0 * M_PI);
+}
+
 }  // namespace volley::accuracy

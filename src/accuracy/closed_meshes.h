@@ -33,6 +33,11 @@ ClosedMesh grid_cube(int n);
 /// midpoints. Centred at (radius, radius, radius) so that coordinates are non-negative.
 ClosedMesh icosphere(int levels, double radius);
 
+/// Generalized winding number of a closed triangle mesh at p, in double (Van Oosterom and
+/// Strackee's solid angles): 1 inside a consistently oriented closed mesh, 0 outside,
+/// near those away from the surface. The inside/outside reference of the query checks.
+double winding_number(const Mesh& m, const std::array<double, 3>& p);
+
 /// Rays of a closed mesh moved by `offset` (every coordinate + offset, rounded to float):
 /// from every interior origin that is still strictly inside after rounding (depth > 0)
 /// to every target, t = 1 at the (rounded) target. `exact_targets` counts targets whose

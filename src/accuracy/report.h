@@ -7,6 +7,7 @@
 
 #include "accuracy/image_error.h"
 #include "accuracy/long_run.h"
+#include "accuracy/query_checks.h"
 #include "accuracy/runner.h"
 #include "accuracy/spawn_check.h"
 
@@ -15,6 +16,7 @@ namespace volley::accuracy {
 struct Report {
   std::vector<Row> rows;
   std::vector<ImageRow> images;
+  std::vector<QueryRow> queries;  ///< the queries beyond the first hit, per ISA
   std::vector<std::string> notes;  ///< what was skipped and why, missing ISAs
   std::string command;             ///< the command line that produced it
   double seconds = 0;              ///< wall time of the whole run

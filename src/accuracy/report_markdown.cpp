@@ -184,6 +184,23 @@ void write_markdown(const Report& report, const std::filesystem::path& file) {
   }
 
   const Tolerances& t = report.tolerances;
+  if (!report.queries.empty()) {
+    out << "## Queries beyond the first hit\n\n"
+           "Crossing parity: rays from inside closed meshes (cube, icospheres) aimed exactly at vertices, edge "
+           "midpoints and diagonals, and in random directions, at offsets 0, 1e3, 1e5 and 1e6, unbounded: an even "
+           "count_intersections is a wrong parity. Box: axis-aligned rays from inside a box mesh through its grid's vertices and edges "
+           "(one crossing each). contains: points farther than 1e-6 of the size from the surface against the box "
+           "and a double winding number. Distance error: max |d - d_ref| / (eps (d_ref + size)) against a double "
+           "brute force, eps = 2^-24. One thread (docs/crossings.md).\n\n"
+           "| ISA | wrong parities / rays | box rays wrong / rays | contains wrong / points | distance error (eps) | "
+           "ns per count | ns per distance |\n|---|---|---|---|---|---|---|\n";
+    for (const QueryRow& q : report.queries)
+      out << "| " << to_string(q.isa) << " | " << q.parity_errors << " / " << q.parity_rays << " | " << q.box_errors
+          << " / " << q.box_rays << " | " << q.contains_errors << " / " << q.contains_points << " | "
+          << num(q.distance_error_max, "%.2f") << " | " << num(q.count_ns, "%.0f") << " | "
+          << num(q.distance_ns, "%.0f") << " |\n";
+    out << "\n";
+  }
   out << "## Definitions and tolerances\n\n"
       << "- Reference: the scalar oracle with `Options::reference_double` (watertight test in double precision, "
          "robust traversal) gives the reference closest hit of every ray; a Möller–Trumbore test in double on the "

@@ -234,6 +234,7 @@ Runner register_accuracy(CLI::App& app) {
 
     if (!a.no_images)
       add_image_rows(a, plan, scenes, report, [&](double f) { bar.update(1.0 - image_share + image_share * f); });
+    report.queries = acc::run_query_checks(plan.isas);
     bar.finish();
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -252,10 +253,13 @@ Runner register_accuracy(CLI::App& app) {
       if (s.config.test == TriangleTest::watertight && s.config.robust) wt_leaks += s.leaks;
       worst_median = std::max(worst_median, s.worst_t_median);
     }
+    std::size_t parity = 0, contains = 0;
+    for (const acc::QueryRow& q : report.queries) parity += q.parity_errors + q.box_errors, contains += q.contains_errors;
     std::printf(
         "accuracy: %zu configurations x %zu cases, %zu rays, watertight+robust leaks %zu, worst t error "
-        "median %.3g, NaN %zu, %zu renders, in %.0f s -> %s/{report.md,accuracy.csv%s}\n",
-        summaries.size(), cases.size(), rays, wt_leaks, worst_median, nan, report.images.size(),
+        "median %.3g, NaN %zu, %zu renders, crossing parity errors %zu, contains errors %zu, in %.0f s -> "
+        "%s/{report.md,accuracy.csv%s}\n",
+        summaries.size(), cases.size(), rays, wt_leaks, worst_median, nan, report.images.size(), parity, contains,
         report.seconds, out.string().c_str(), plotted ? ",accuracy.png" : "");
     return 0;
   };

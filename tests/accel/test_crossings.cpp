@@ -85,25 +85,6 @@ std::vector<Ray> aimed_rays(const ClosedMesh& c, float offset) {
   return rays;
 }
 
-/// Generalized winding number of a closed triangle mesh at p, in double (1 inside, 0 outside).
-double winding_number(const volley::accuracy::Mesh& m, const std::array<double, 3>& p) {
-  double sum = 0.0;
-  for (std::size_t t = 0; t < m.triangles(); ++t) {
-    double v[3][3];
-    for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) v[k][a] = double(m.xyz[3 * m.idx[3 * t + k] + a]) - p[a];
-    const double la = std::sqrt(v[0][0] * v[0][0] + v[0][1] * v[0][1] + v[0][2] * v[0][2]);
-    const double lb = std::sqrt(v[1][0] * v[1][0] + v[1][1] * v[1][1] + v[1][2] * v[1][2]);
-    const double lc = std::sqrt(v[2][0] * v[2][0] + v[2][1] * v[2][1] + v[2][2] * v[2][2]);
-    const double det = v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0]) +
-                       v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0]);
-    auto dot = [&](int i, int j) { return v[i][0] * v[j][0] + v[i][1] * v[j][1] + v[i][2] * v[j][2]; };
-    const double den = la * lb * lc + dot(0, 1) * lc + dot(0, 2) * lb + dot(1, 2) * la;
-    sum += 2.0 * std::atan2(det, den);
-  }
-  return sum / (4.0 * M_PI);
-}
-
 }  // namespace
 
 TEST_CASE("crossings: every ISA's hits are the scalar twin's, hit for hit") {
@@ -227,7 +208,7 @@ TEST_CASE("crossings: contains agrees with a double-precision reference away fro
         if (std::abs(depth) < 1e-3) continue;  // near the surface: no sure reference
         inside = depth > 0;
       } else {
-        const double w = winding_number(c.mesh, p);
+        const double w = volley::accuracy::winding_number(c.mesh, p);
         if (std::abs(w - std::round(w)) > 1e-3) continue;
         inside = std::lround(w) != 0;
       }

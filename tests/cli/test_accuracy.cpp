@@ -53,6 +53,9 @@ TEST_CASE("cli accuracy: a tiny run writes report.md, accuracy.csv and accuracy.
   CHECK(report.find("## Summary per configuration") != std::string::npos);
   CHECK(report.find("## Robust traversal") != std::string::npos);
   CHECK(report.find("## Image error") != std::string::npos);
+  // The query rows: no wrong parity, no wrong inside/outside (scalar: the oracle's rule).
+  CHECK(report.find("## Queries beyond the first hit") != std::string::npos);
+  CHECK(r.output.find("crossing parity errors 0, contains errors 0") != std::string::npos);
   CHECK(report.find("shared-mesh cases skipped") != std::string::npos);
   CHECK(report.find("nan") == std::string::npos);
 
