@@ -76,7 +76,7 @@ HitLists read_hit_lists(const std::filesystem::path& file) {
   const std::vector<std::uint32_t>& words = in.words;
   const std::uint64_t rays = in.count;
   HitLists lists;
-  if (words.size() / 2 < rays + 1) throw LoadError(file, "truncated: the header announces " + std::to_string(rays) + " rays, but their offsets do not fit");
+  if (rays >= words.size() / 2) throw LoadError(file, "truncated: the header announces " + std::to_string(rays) + " rays, but their offsets do not fit");
   lists.offsets.resize(rays + 1);
   for (std::size_t i = 0; i <= rays; ++i) lists.offsets[i] = std::uint64_t(words[2 * i]) | std::uint64_t(words[2 * i + 1]) << 32;
   const std::size_t rest = words.size() - 2 * (rays + 1);
