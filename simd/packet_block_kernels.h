@@ -2,6 +2,7 @@
 // leaves and the standalone kernels), closest hit and any hit. Semantics as in
 // block_kernels.h.
 #pragma once
+#include <bit>
 #include <cstdint>
 #include <limits>
 
@@ -31,7 +32,49 @@ struct PacketKernels {
   /// blocks[0 .. count) occludes (tmin <= t < tmax). Stops as soon as all are occluded.
   static std::uint32_t occluded(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count,
                                 std::uint32_t active);
+  /// Every triangle of blocks[0 .. count) that the lanes of `active` (ANDed with
+  /// rays.rays.active) hit with tmin <= t < tmax by the crossing test
+  /// (detail::CrossingTestOf): sink(lane, prim, t, u, v) for each, triangle by triangle.
+  template <class Sink>
+  static void all(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count, std::uint32_t active,
+                  Sink& sink);
 };
+
+template <class Arch, TriangleTest Test, int K, int BW>
+template <class Sink>
+void PacketKernels<Arch, Test, K, BW>::all(const PreparedPacket<K>& prepared, const Block* blocks, std::uint32_t count,
+                                           std::uint32_t active, Sink& sink) {
+  using T = detail::CrossingTestOf<Arch, Test>;
+  using B = detail::FloatB<Arch>;
+  using M = detail::MaskB<Arch>;
+  const RayPacket<K>& rays = prepared.rays;
+  active &= rays.active;
+  for (int c = 0; c < K; c += L) {
+    const std::uint32_t act_bits = (active >> c) & ((2u << (L - 1)) - 1u);
+    if (act_bits == 0) continue;
+    const M act = detail::mask_from_bits<Arch>(act_bits);
+    const auto r = T::template load<K>(prepared, c);
+    const B upper = xsimd::select(act, B::load_aligned(rays.tmax + c), B(-std::numeric_limits<float>::infinity()));
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const Block& block = blocks[b];
+      for (int j = 0; j < W && block.prim[j] != kInvalidPrim; ++j) {
+        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+        if (xsimd::none(cand.valid)) continue;
+        const B t = detail::cand_t<T>(cand);
+        std::uint32_t bits = detail::bits_from_mask<Arch>(detail::confirmed<T>(r, cand, t, upper)) & act_bits;
+        if (bits == 0) continue;
+        B u = cand.u, v = cand.v;
+        if constexpr (detail::kDetScaled<T>) u = u / cand.den, v = v / cand.den;
+        alignas(64) float ts[L], us[L], vs[L];
+        t.store_aligned(ts), u.store_aligned(us), v.store_aligned(vs);
+        for (; bits != 0; bits &= bits - 1) {
+          const int lane = std::countr_zero(bits);
+          sink(c + lane, block.prim[j], ts[lane], us[lane], vs[lane]);
+        }
+      }
+    }
+  }
+}
 
 // ---------------------------------------------------------------------------------------
 

@@ -43,6 +43,25 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out) {
+  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return;
+  PreparedPacket<K> prep;
+  prep.rays = rays;
+  detail::PacketSetup<K> setup;
+  screen(prep.rays, setup);
+  if (setup.valid == 0) return;
+  PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
+  auto sink = [out](int lane, std::uint32_t prim, float t, float u, float v) { out[lane].push_back(Hit{t, u, v, prim}); };
+  detail::AllHitsPacket<WideKernels, decltype(sink)> query{sink};
+  if (setup.walk == detail::PacketWalk::frustum)
+    trace_frustum(bvh, prep, setup, query);
+  else if (setup.walk == detail::PacketWalk::one_octant)
+    trace_packet<decltype(query), true>(bvh, prep, setup, query);
+  else
+    trace_packet<decltype(query), false>(bvh, prep, setup, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;

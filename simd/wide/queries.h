@@ -157,6 +157,29 @@ struct ClosestHitPacket {
   }
 };
 
+/// Every hit of a packet's lanes by the crossing test: sink(lane, prim, t, u, v) for each;
+/// no lane finishes early and no bound falls.
+template <class Kernels, class Sink>
+struct AllHitsPacket {
+  using B = typename Kernels::Float;
+  using Packet = typename Kernels::LeafPacket;
+  static constexpr int K = Kernels::K, L = Kernels::L;
+  Sink& sink;
+
+  B bound(int, B tmax) const { return tmax; }
+  LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
+                 std::uint32_t lanes, B*) {
+    Packet::all(prep, blocks, count, lanes, sink);
+    return {0, false};
+  }
+  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int i, float&) {
+    auto one = [this, i](std::uint32_t prim, float t, float u, float v) { sink(i, prim, t, u, v); };
+    AllHitsRay<Kernels, decltype(one)> q{one};
+    Kernels::trace_single(bvh, ray, start, q);
+    return false;
+  }
+};
+
 /// Any hit of a packet's lanes: a lane is finished at its first hit.
 template <class Kernels>
 struct AnyHitPacket {

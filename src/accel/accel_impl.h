@@ -197,6 +197,9 @@ struct Accel::Impl {
   /// Every hit of the layers `mask` selects, instances included, appended to `out`
   /// attributed (geom, prim, inst) in no particular order (accel_crossings.cpp).
   void all_hits(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const;
+  /// all_hits of rays[0 .. count) into out[0 .. count) (stream.cpp: runs of 16 as packets
+  /// where the stream policy says so).
+  void all_hits(const Ray* rays, std::size_t count, std::vector<Hit>* out) const;
   /// The nearest surface point within sqrt(query.d2) (accel_points.cpp). Throws Error
   /// for instances and the plane test.
   ClosestPoint closest_point(core::PointQuery& query) const;

@@ -42,6 +42,8 @@ class Engine {
   /// crossing rule where the test has one (the watertight test: each crossing of a closed
   /// mesh once, docs/crossings.md).
   virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;
+  /// The same for the active lanes of a packet, lane i's into out[i]. Lane by lane by default.
+  virtual void all_hits(const RayPacket<16>& rays, std::vector<Hit>* out) const;
   /// Offers the engine's primitives to a point query: updates `query` with a nearer one.
   virtual void closest_point(core::PointQuery& query) const = 0;
   /// Whether packets are traced as packets, not lane by lane (the stream policy packs rays

@@ -63,4 +63,26 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
   }
 }
 
+void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>* out) const {
+  for (std::size_t first = 0; first < count; first += 16) {
+    const std::size_t n = std::min<std::size_t>(16, count - first);
+    std::vector<Hit>* lanes = out + first;
+    if (!as_packet(*this, rays + first, n)) {
+      for (std::size_t i = 0; i < n; ++i) all_hits(rays[first + i], kMaskAll, lanes[i]);
+      continue;
+    }
+    RayPacket<16> p;
+    volley::load(p, rays + first, 16);
+    std::size_t before[16];
+    for (int i = 0; i < 16; ++i) before[i] = lanes[i].size();
+    for (const Layer& l : layers) {
+      for (int i = 0; i < 16; ++i) before[i] = lanes[i].size();
+      if (l.triangle_engine) l.triangle_engine->all_hits(p, lanes);
+      if (l.polygon_engine) l.polygon_engine->all_hits(p, lanes);
+      for (int i = 0; i < 16; ++i)
+        for (std::size_t k = before[i]; k < lanes[i].size(); ++k) attribute(lanes[i][k].prim, lanes[i][k].geom);
+    }
+  }
+}
+
 }  // namespace volley

@@ -50,6 +50,7 @@ class WideEngine final : public TriangleEngine {
   }
   bool occluded(const Ray& ray) const override { return accel_->occluded(ray); }
   void all_hits(const Ray& ray, std::vector<Hit>& out) const override { accel_->all_hits(ray, out); }
+  void all_hits(const RayPacket<16>& rays, std::vector<Hit>* out) const override { accel_->all_hits(rays, out); }
   void closest_point(core::PointQuery& query) const override { accel_->closest_point(query); }
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const override { accel_->intersect(rays, hits); }
   std::uint32_t occluded(const RayPacket<16>& rays, std::uint32_t lanes) const override {

@@ -128,10 +128,15 @@ TEST_CASE("crossings: rays from inside closed meshes aimed at vertices, edges an
       REQUIRE(rays.size() > 100);
       for (Isa isa : every_isa()) {
         const Accel a = mesh_accel(c.mesh, isa, offset);
-        std::size_t even = 0;
+        std::size_t even = 0, batch_even = 0;
         for (const Ray& r : rays) even += a.count_intersections(r) % 2 == 0;
+        // The batch form (runs of 16 rays as packets where the stream policy says so).
+        std::vector<std::uint32_t> counts(rays.size());
+        a.count_intersections(rays.data(), rays.size(), counts.data(), 1);
+        for (std::uint32_t n : counts) batch_even += n % 2 == 0;
         INFO(c.name << " offset " << offset << " " << volley::to_string(isa) << ": " << rays.size() << " rays");
         CHECK(even == 0);
+        CHECK(batch_even == 0);
       }
     }
   }
