@@ -167,10 +167,16 @@ void Accel::contains(const float* xyz, std::size_t count, std::uint8_t* inside, 
   if (!impl_->committed) throw Error("contains: call commit() after adding geometry");
   require("contains", xyz, count, "xyz");
   require("contains", inside, count, "inside");
-  // In Morton order too: neighbouring rays walk the same nodes.
+  // In Morton order: the rays of neighbouring points share a direction and nearly an
+  // origin, so runs of 16 go as packets (the stream policy) through the same nodes.
   const std::vector<std::uint32_t> order = morton_order(xyz, count);
   for_chunks("contains", count, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) inside[order[k]] = contains(xyz + 3 * std::size_t{order[k]}) ? 1 : 0;
+    thread_local std::vector<Ray> rays;
+    rays.clear();
+    for (std::size_t k = b; k < e; ++k) rays.push_back(contains_ray(xyz + 3 * std::size_t{order[k]}));
+    for_runs(*impl_, rays.data(), 0, rays.size(), [&](std::size_t i, const std::vector<Hit>& hits) {
+      inside[order[b + i]] = hits.size() % 2 == 1 ? 1 : 0;
+    });
   });
 }
 

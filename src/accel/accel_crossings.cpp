@@ -10,12 +10,6 @@
 namespace volley {
 namespace {
 
-/// The ray of contains(): from the point along kContainsDirection, t >= 0.
-Ray contains_ray(const float* p) {
-  return Ray{{p[0], p[1], p[2]}, 0.0f, {kContainsDirection[0], kContainsDirection[1], kContainsDirection[2]},
-             std::numeric_limits<float>::infinity()};
-}
-
 /// The hits of one ray, in a buffer each thread keeps (no allocation per ray).
 std::vector<Hit>& scratch() {
   thread_local std::vector<Hit> hits;

@@ -5,6 +5,7 @@
 // whose mask shares a bit with its own: triangles, then polygons bounded by their hit.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -27,6 +28,12 @@ namespace volley {
 
 /// Hits nearest first; ties (one t on two primitives) by instance, geometry, primitive.
 void sort_hits(Hit* first, Hit* last);
+
+/// The ray of contains(): from the point along kContainsDirection, t >= 0.
+inline Ray contains_ray(const float* p) {
+  return Ray{{p[0], p[1], p[2]}, 0.0f, {kContainsDirection[0], kContainsDirection[1], kContainsDirection[2]},
+             std::numeric_limits<float>::infinity()};
+}
 
 struct Accel::Impl {
   /// One add_triangles / add_polygon call: its primitives have the internal ids first ..
