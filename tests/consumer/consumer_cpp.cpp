@@ -205,6 +205,25 @@ void check_c_api_threads() {
   volley_scene_destroy(scene);
 }
 
+/// The queries beyond the first hit through the installed C++ headers: the scene's floor
+/// and table seen straight down through their shared diagonals, and the floor's distance.
+void check_queries() {
+  volley::Accel accel;
+  add_scene(accel);
+  accel.commit();
+  const volley::Ray down{{0.5f, 0.5f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, 100.0f};
+  volley::Hit hits[4];
+  check(accel.intersect_all(down, hits, 4) == 2, "intersect_all: one hit per surface through shared diagonals");
+  check(hits[0].t == 4.0f && hits[1].t == 5.0f, "intersect_all: nearest first");
+  check(accel.count_intersections(down) == 2, "count_intersections");
+  const volley::HitLists lists = accel.intersect_all(&down, 1, 1);
+  check(lists.offsets.size() == 2 && lists.offsets[1] == 2, "intersect_all batch offsets");
+  const float above[3] = {-1.9f, 1.9f, 0.25f};
+  const volley::ClosestPoint c = accel.closest_point(above);
+  check(c.found() && c.geom == 0 && std::fabs(c.distance - 0.25f) < 1e-6f, "closest_point on the floor");
+  check(!accel.contains(above), "contains: an open scene, above it");
+}
+
 }  // namespace
 
 int main() {
@@ -213,6 +232,7 @@ int main() {
       check_accel(test, isa);
   check_errors();
   check_c_api_threads();
+  check_queries();
   if (failures) {
     std::printf("consumer_cpp: %d failures\n", failures);
     return 1;
