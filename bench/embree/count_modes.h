@@ -55,6 +55,23 @@ struct CountingContext {
   }
 };
 
+/// Embree's count of every ray, one rtcIntersect1 each; keep_hits: every hit kept and
+/// sorted by t too (what a list of all hits costs).
+inline void embree_count1(RTCScene scene, bool coherent, bool keep_hits, const std::vector<Ray>& rays, Answers& out) {
+  CountingContext c(coherent);
+  c.keep_hits = keep_hits;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    RTCRayHit e;
+    to_embree(rays[i], e);
+    e.ray.id = 0;
+    c.count[0] = 0;
+    rtcIntersect1(scene, &c.context, &e);
+    if (keep_hits)
+      std::sort(c.records[0], c.records[0] + c.count[0], [](const auto& x, const auto& y) { return x.t < y.t; });
+    out.counts[i] = c.count[0];
+  }
+}
+
 /// count1 (one ray at a time on both sides), count16 (Embree's 16-wide packets; volley's
 /// batch form, which packs runs of 16 rays by its stream policy) and all1 (every hit,
 /// sorted by t).
@@ -62,15 +79,7 @@ inline void add_count_modes(std::vector<Mode>& modes, const EmbreeScene& embree,
   const RTCScene scene = embree.scene();
   modes.push_back({"count1", "rtcIntersect1+filter", "count_intersections(Ray)", false,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     CountingContext c(coherent);
-                     for (std::size_t i = 0; i < rays.size(); ++i) {
-                       RTCRayHit e;
-                       to_embree(rays[i], e);
-                       e.ray.id = 0;
-                       c.count[0] = 0;
-                       rtcIntersect1(scene, &c.context, &e);
-                       out.counts[i] = c.count[0];
-                     }
+                     embree_count1(scene, coherent, false, rays, out);
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      for (std::size_t i = 0; i < rays.size(); ++i) out.counts[i] = accel.count_intersections(rays[i]);
@@ -100,18 +109,7 @@ inline void add_count_modes(std::vector<Mode>& modes, const EmbreeScene& embree,
                    true});
   modes.push_back({"all1", "rtcIntersect1+filter", "intersect_all(Ray, Hit*, n)", false,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
-                     CountingContext c(coherent);
-                     c.keep_hits = true;
-                     for (std::size_t i = 0; i < rays.size(); ++i) {
-                       RTCRayHit e;
-                       to_embree(rays[i], e);
-                       e.ray.id = 0;
-                       c.count[0] = 0;
-                       rtcIntersect1(scene, &c.context, &e);
-                       CountingContext::Record* r = c.records[0];
-                       std::sort(r, r + c.count[0], [](const auto& x, const auto& y) { return x.t < y.t; });
-                       out.counts[i] = c.count[0];
-                     }
+                     embree_count1(scene, coherent, true, rays, out);
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      Hit hits[CountingContext::kMaxHits];

@@ -188,6 +188,11 @@ struct WideKernels {
 
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
+  /// The start of every packet query: screens the packet, prepares it for the triangle
+  /// test and hands it to the walk its lanes allow (frustum or per lane). Returns the lanes
+  /// the query finished (0 for an empty tree or no valid lane).
+  template <class Query>
+  static std::uint32_t trace_packet_query(const View& bvh, const RayPacket<K>& rays, Query& query);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
   /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
   /// zero direction component (screen() says so); taken only for packets whose lanes share

@@ -10,25 +10,9 @@
 namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits) {
-  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return;
-  PreparedPacket<K> prep;
-  prep.rays = rays;
-  detail::PacketSetup<K> setup;
-  screen(prep.rays, setup);
-  if (setup.valid == 0) return;
-  PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  detail::ClosestHitPacket<WideKernels> query{hits};
-  if (setup.walk == detail::PacketWalk::frustum)
-    trace_frustum(bvh, prep, setup, query);
-  else if (setup.walk == detail::PacketWalk::one_octant)
-    trace_packet<decltype(query), true>(bvh, prep, setup, query);
-  else
-    trace_packet<decltype(query), false>(bvh, prep, setup, query);
-}
-
-template <class Arch, TriangleTest Test, bool Robust>
-std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const RayPacket<K>& rays) {
+template <class Query>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const View& bvh, const RayPacket<K>& rays,
+                                                                  Query& query) {
   if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return 0;
   PreparedPacket<K> prep;
   prep.rays = rays;
@@ -36,29 +20,28 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
   screen(prep.rays, setup);
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  detail::AnyHitPacket<WideKernels> query;
   if (setup.walk == detail::PacketWalk::frustum) return trace_frustum(bvh, prep, setup, query);
-  return setup.walk == detail::PacketWalk::one_octant ? trace_packet<decltype(query), true>(bvh, prep, setup, query)
-                                                      : trace_packet<decltype(query), false>(bvh, prep, setup, query);
+  return setup.walk == detail::PacketWalk::one_octant ? trace_packet<Query, true>(bvh, prep, setup, query)
+                                                      : trace_packet<Query, false>(bvh, prep, setup, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits) {
+  detail::ClosestHitPacket<WideKernels> query{hits};
+  trace_packet_query(bvh, rays, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const RayPacket<K>& rays) {
+  detail::AnyHitPacket<WideKernels> query;
+  return trace_packet_query(bvh, rays, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out) {
-  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return;
-  PreparedPacket<K> prep;
-  prep.rays = rays;
-  detail::PacketSetup<K> setup;
-  screen(prep.rays, setup);
-  if (setup.valid == 0) return;
-  PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
   auto sink = [out](int lane, std::uint32_t prim, float t, float u, float v) { out[lane].push_back(Hit{t, u, v, prim}); };
   detail::AllHitsPacket<WideKernels, decltype(sink)> query{sink};
-  if (setup.walk == detail::PacketWalk::frustum)
-    trace_frustum(bvh, prep, setup, query);
-  else if (setup.walk == detail::PacketWalk::one_octant)
-    trace_packet<decltype(query), true>(bvh, prep, setup, query);
-  else
-    trace_packet<decltype(query), false>(bvh, prep, setup, query);
+  trace_packet_query(bvh, rays, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>

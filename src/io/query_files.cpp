@@ -98,7 +98,8 @@ void write_hit_lists(const std::filesystem::path& file, const HitLists& lists) {
   const std::size_t first = words.size();
   words.resize(first + 6 * lists.hits.size());
   std::memcpy(words.data() + first, lists.hits.data(), lists.hits.size() * sizeof(Hit));
-  record_file::write_words(file, "VALL", kVersion, lists.offsets.empty() ? 0 : lists.offsets.size() - 1, words, "hit-list file");
+  write_records<std::uint32_t>(file, "VALL", kVersion, words, "hit-list file",
+                               lists.offsets.empty() ? 0 : lists.offsets.size() - 1);
 }
 
 }  // namespace volley::io

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -64,22 +65,30 @@ inline std::string quote_magic(const unsigned char* m) {
   return s + "\"";
 }
 
-/// Reads a file of one format: checks magic, version and size against count records.
-template <class Record>
-std::vector<Record> read_records(const std::filesystem::path& file, const char magic[4], const char* what,
-                                 const char* other_magic, const char* other_what, std::uint32_t want_version,
-                                 const std::string& versions) {
+/// An opened file of the scheme, its header checked: the stream after the header, the
+/// file's size and the header's count.
+struct Opened {
+  File f{nullptr, &std::fclose};
+  std::uintmax_t size = 0;
+  std::uint64_t count = 0;
+};
+
+/// Opens `file` and checks its magic (naming `other_what` when it has `other_magic`) and version.
+inline Opened open_file(const std::filesystem::path& file, const char magic[4], const char* what,
+                        const char* other_magic, const char* other_what, std::uint32_t want_version,
+                        const std::string& versions) {
   std::error_code ec;
   const auto status = std::filesystem::status(file, ec);
   if (!std::filesystem::exists(status)) throw LoadError(file, "file not found");
   if (std::filesystem::is_directory(status)) throw LoadError(file, "is a directory, expected a " + std::string(what));
-  File f(std::fopen(file.c_str(), "rb"), &std::fclose);
-  if (!f) throw LoadError(file, std::string("cannot open file (") + std::strerror(errno) + ")");
-  const std::uintmax_t size = std::filesystem::file_size(file, ec);
+  Opened o;
+  o.f.reset(std::fopen(file.c_str(), "rb"));
+  if (!o.f) throw LoadError(file, std::string("cannot open file (") + std::strerror(errno) + ")");
+  o.size = std::filesystem::file_size(file, ec);
   if (ec) throw LoadError(file, "cannot read file size (" + ec.message() + ")");
 
   unsigned char header[kRecordHeaderBytes];
-  const std::size_t got = std::fread(header, 1, sizeof(header), f.get());
+  const std::size_t got = std::fread(header, 1, sizeof(header), o.f.get());
   if (got >= 4 && std::memcmp(header, magic, 4) != 0) {
     std::string msg = "not a " + std::string(what) + ": expected magic \"" + std::string(magic, 4) +
                       "\" at byte 0, found " + quote_magic(header);
@@ -93,7 +102,19 @@ std::vector<Record> read_records(const std::filesystem::path& file, const char m
   if (version != want_version)
     throw LoadError(file, "unsupported " + std::string(what) + " version " + std::to_string(version) + " (expected " +
                               versions + ")");
-  const std::uint64_t count = le64(header + 8);
+  o.count = le64(header + 8);
+  return o;
+}
+
+/// Reads a file of one format: checks magic, version and size against count records.
+template <class Record>
+std::vector<Record> read_records(const std::filesystem::path& file, const char magic[4], const char* what,
+                                 const char* other_magic, const char* other_what, std::uint32_t want_version,
+                                 const std::string& versions) {
+  Opened o = open_file(file, magic, what, other_magic, other_what, want_version, versions);
+  File& f = o.f;
+  const std::uintmax_t size = o.size;
+  const std::uint64_t count = o.count;
   const std::uintmax_t payload = size - kRecordHeaderBytes;
   if (count > payload / sizeof(Record))
     throw LoadError(file, "truncated: header says " + std::to_string(count) + " records of " +
@@ -111,9 +132,12 @@ std::vector<Record> read_records(const std::filesystem::path& file, const char m
   return records;
 }
 
+/// Writes a file of one format: the header (count = the records, or `header_count` when
+/// given: .vall), then the records.
 template <class Record>
 void write_records(const std::filesystem::path& file, const char magic[4], std::uint32_t version,
-                   std::span<const Record> records, const char* what) {
+                   std::span<const Record> records, const char* what, std::optional<std::uint64_t> header_count = {}) {
+  const std::uint64_t count = header_count.value_or(records.size());
   auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": cannot write " + what + " (" + why + ")");
   };
@@ -127,8 +151,8 @@ void write_records(const std::filesystem::path& file, const char magic[4], std::
   unsigned char header[kRecordHeaderBytes];
   std::memcpy(header, magic, 4);
   put_le32(header + 4, version);
-  put_le32(header + 8, static_cast<std::uint32_t>(records.size()));
-  put_le32(header + 12, static_cast<std::uint32_t>(std::uint64_t(records.size()) >> 32));
+  put_le32(header + 8, static_cast<std::uint32_t>(count));
+  put_le32(header + 12, static_cast<std::uint32_t>(count >> 32));
   bool ok = std::fwrite(header, 1, sizeof(header), f.get()) == sizeof(header);
   if constexpr (std::endian::native == std::endian::little) {
     ok = ok && (records.empty() || std::fwrite(records.data(), sizeof(Record), records.size(), f.get()) == records.size());
@@ -152,55 +176,13 @@ struct Words {
   std::vector<std::uint32_t> words;
 };
 inline Words read_words(const std::filesystem::path& file, const char magic[4], const char* what, std::uint32_t version) {
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw LoadError(file, "file not found");
-  File f(std::fopen(file.c_str(), "rb"), &std::fclose);
-  if (!f) throw LoadError(file, std::string("cannot open file (") + std::strerror(errno) + ")");
-  const std::uintmax_t size = std::filesystem::file_size(file, ec);
-  if (ec) throw LoadError(file, "cannot read file size (" + ec.message() + ")");
-  unsigned char header[kRecordHeaderBytes];
-  const std::size_t got = std::fread(header, 1, sizeof(header), f.get());
-  if (got >= 4 && std::memcmp(header, magic, 4) != 0)
-    throw LoadError(file, "not a " + std::string(what) + ": expected magic \"" + std::string(magic, 4) +
-                              "\" at byte 0, found " + quote_magic(header));
-  if (got < sizeof(header)) throw LoadError(file, "truncated header: " + std::to_string(got) + " bytes, expected 16");
-  if (le32(header + 4) != version)
-    throw LoadError(file, "unsupported " + std::string(what) + " version " + std::to_string(le32(header + 4)) +
-                              " (expected " + std::to_string(version) + ")");
-  if ((size - kRecordHeaderBytes) % 4 != 0) throw LoadError(file, "the data after the header is not whole 32-bit words");
-  Words out{le64(header + 8), std::vector<std::uint32_t>((size - kRecordHeaderBytes) / 4)};
-  if (!out.words.empty() && std::fread(out.words.data(), 4, out.words.size(), f.get()) != out.words.size())
+  Opened o = open_file(file, magic, what, magic, what, version, std::to_string(version));
+  if ((o.size - kRecordHeaderBytes) % 4 != 0) throw LoadError(file, "the data after the header is not whole 32-bit words");
+  Words out{o.count, std::vector<std::uint32_t>((o.size - kRecordHeaderBytes) / 4)};
+  if (!out.words.empty() && std::fread(out.words.data(), 4, out.words.size(), o.f.get()) != out.words.size())
     throw LoadError(file, "cannot read the data (file shrank while reading)");
   to_from_little_endian(out.words.data(), out.words.size());
   return out;
-}
-
-/// Writes a file of the scheme with header count `count` and `words` after it.
-inline void write_words(const std::filesystem::path& file, const char magic[4], std::uint32_t version, std::uint64_t count,
-                        std::span<const std::uint32_t> words, const char* what) {
-  // The header's count slot holds `count`; write_records puts the record count there, so
-  // write the header by hand.
-  auto fail = [&](const std::string& why) {
-    throw std::runtime_error(file.string() + ": cannot write " + what + " (" + why + ")");
-  };
-  if (file.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(file.parent_path(), ec);
-    if (ec) fail(ec.message());
-  }
-  File f(std::fopen(file.c_str(), "wb"), &std::fclose);
-  if (!f) fail(std::strerror(errno));
-  unsigned char header[kRecordHeaderBytes];
-  std::memcpy(header, magic, 4);
-  put_le32(header + 4, version);
-  put_le32(header + 8, static_cast<std::uint32_t>(count));
-  put_le32(header + 12, static_cast<std::uint32_t>(count >> 32));
-  std::vector<std::uint32_t> le(words.begin(), words.end());
-  to_from_little_endian(le.data(), le.size());
-  bool ok = std::fwrite(header, 1, sizeof(header), f.get()) == sizeof(header);
-  ok = ok && (le.empty() || std::fwrite(le.data(), 4, le.size(), f.get()) == le.size());
-  if (!ok) fail(std::strerror(errno));
-  if (std::fclose(f.release()) != 0) fail(std::strerror(errno));
 }
 
 }  // namespace record_file
