@@ -45,6 +45,7 @@
 #include "core/point_triangle.h"
 #include "simd/arch.h"
 #include "simd/block_kernels.h"
+#include "simd/hit_list.h"
 #include "simd/kernel_common.h"
 #include "simd/prepared_packet.h"
 #include "simd/prepared_ray.h"

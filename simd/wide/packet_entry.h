@@ -39,7 +39,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const R
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out) {
-  auto sink = [out](int lane, std::uint32_t prim, float t, float u, float v) { out[lane].push_back(Hit{t, u, v, prim}); };
+  auto sink = [out](int lane, std::uint32_t prim, float t, float u, float v) { append_hit(out[lane], Hit{t, u, v, prim}); };
   detail::AllHitsPacket<WideKernels, decltype(sink)> query{sink};
   trace_packet_query(bvh, rays, query);
 }

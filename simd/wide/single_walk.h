@@ -316,7 +316,7 @@ bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::all_hits(const View& view, const Ray& ray, std::vector<Hit>& out) {
-  auto sink = [&out](std::uint32_t prim, float t, float u, float v) { out.push_back(Hit{t, u, v, prim}); };
+  auto sink = [&out](std::uint32_t prim, float t, float u, float v) { append_hit(out, Hit{t, u, v, prim}); };
   detail::AllHitsRay<WideKernels, decltype(sink)> query{sink};
   trace_ray(view, ray, view.root, query);
 }

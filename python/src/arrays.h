@@ -1,0 +1,43 @@
+// NumPy arrays in and out of the binding: any float dtype and layout in (converted once to
+// C-contiguous float32), shapes checked with errors that name the argument, answers as
+// fresh arrays shaped like the caller's leading dimensions.
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace volley::python {
+
+namespace py = pybind11;
+
+/// C-contiguous float32, converted from any real dtype and layout (a copy only when needed).
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+/// C-contiguous uint32 (indices).
+using IndexArray = py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>;
+
+/// Converts `obj` to float32 with last dimension `width`; ValueError naming `name` and
+/// the expected shape otherwise. `leading` gets the other dimensions (the answer's shape).
+FloatArray as_float_rows(const py::handle& obj, const char* name, py::ssize_t width, std::vector<py::ssize_t>& leading);
+
+/// The same for an (M, 3) index array of integers, each below `limit`.
+IndexArray as_triangles(const py::handle& obj, const char* name, std::size_t limit);
+
+/// A new array of `leading` + `tail` dimensions.
+template <class T>
+py::array_t<T> new_array(const std::vector<py::ssize_t>& leading, std::initializer_list<py::ssize_t> tail = {}) {
+  std::vector<py::ssize_t> shape = leading;
+  shape.insert(shape.end(), tail.begin(), tail.end());
+  return py::array_t<T>(shape);
+}
+
+/// The number of rows that `leading` describes.
+inline std::size_t rows_of(const std::vector<py::ssize_t>& leading) {
+  std::size_t n = 1;
+  for (py::ssize_t d : leading) n *= static_cast<std::size_t>(d);
+  return n;
+}
+
+}  // namespace volley::python

@@ -1,0 +1,411 @@
+#include "scene.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "arrays.h"
+
+namespace volley::python {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// Open3D's rays (ox oy oz dx dy dz per row) as volley's over [tnear, tfar).
+std::vector<Ray> to_rays(const float* r, std::size_t n, float tnear, float tfar) {
+  std::vector<Ray> out(n);
+  for (std::size_t i = 0; i < n; ++i, r += 6) out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
+  return out;
+}
+
+void check_threads(int nthreads) {
+  if (nthreads < 0) throw py::value_error("nthreads: expected 0 (all cores) or a positive count, got " + std::to_string(nthreads));
+}
+
+/// body(begin, end) over [0, n) in chunks of 1024: on all cores (nthreads = 0), this thread
+/// alone (1) or an arena of nthreads. Called without the GIL.
+template <class Body>
+void parallel(std::size_t n, int nthreads, Body&& body) {
+  if (nthreads == 1 || n <= 1024) {
+    body(std::size_t{0}, n);
+    return;
+  }
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  };
+  if (nthreads == 0) {
+    run();
+  } else {
+    tbb::task_arena arena(nthreads);
+    arena.execute(run);
+  }
+}
+
+TriangleTest parse_test(const std::string& s) {
+  if (auto t = parse_triangle_test(s)) return *t;
+  throw py::value_error("test: expected \"watertight\", \"moller\" or \"plane\", got \"" + s + "\"");
+}
+
+Isa parse_isa_name(const std::string& s) {
+  if (s == "auto") return Isa::automatic;
+  if (auto i = volley::parse_isa(s)) return *i;
+  throw py::value_error("isa: expected \"auto\", \"scalar\", \"sse4.2\", \"avx2\" or \"avx512\", got \"" + s + "\"");
+}
+
+void unit_normal(const float* a, const float* b, const float* c, float* n) {
+  const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (int k = 0; k < 3; ++k) n[k] = len > 0 ? n[k] / len : 0.0f;
+}
+
+}  // namespace
+
+RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa) {
+  options_.test = parse_test(test);
+  options_.isa = parse_isa_name(isa);
+}
+
+void RaycastingScene::require_geometry(const char* caller, std::uint32_t geometry) const {
+  if (geometry >= geometries_.size())
+    throw py::value_error(std::string(caller) + ": geometry " + std::to_string(geometry) + " does not exist (the scene has " +
+                          std::to_string(geometries_.size()) + ")");
+}
+
+std::uint32_t RaycastingScene::add_triangles(const py::handle& vertices, const py::handle& triangles) {
+  std::vector<py::ssize_t> lead;
+  const FloatArray v = as_float_rows(vertices, "vertices", 3, lead);
+  if (lead.size() != 1) throw py::value_error("vertices: expected shape (N, 3)");
+  const std::size_t nv = rows_of(lead);
+  for (std::size_t i = 0; i < 3 * nv; ++i)
+    if (!std::isfinite(v.data()[i]))
+      throw py::value_error("vertices: row " + std::to_string(i / 3) + " has a NaN or infinite coordinate");
+  const IndexArray t = as_triangles(triangles, "triangles", nv);
+  Geometry g;
+  g.xyz.assign(v.data(), v.data() + 3 * nv);
+  g.indices.assign(t.data(), t.data() + t.size());
+  const std::uint32_t id = accel_.add_triangles(g.xyz.data(), nv, g.indices.data(), g.indices.size() / 3);
+  geometries_.push_back(std::move(g));
+  dirty_ = true;
+  return id;
+}
+
+std::uint32_t RaycastingScene::add_instance(const std::shared_ptr<RaycastingScene>& prototype, const py::handle& transform) {
+  if (!prototype) throw py::value_error("prototype: expected a RaycastingScene");
+  const py::array_t<float, py::array::c_style | py::array::forcecast> m = py::array::ensure(transform);
+  if (!m || m.ndim() != 2 || m.shape(1) != 4 || (m.shape(0) != 3 && m.shape(0) != 4))
+    throw py::value_error("transform: expected shape (3, 4) or (4, 4): [A | t] row by row");
+  Geometry g;
+  std::memcpy(g.transform, m.data(), sizeof g.transform);
+  g.prototype = prototype;
+  const std::uint32_t id = accel_.add_instance(prototype->committed(), g.transform);
+  geometries_.push_back(std::move(g));
+  dirty_ = true;
+  return id;
+}
+
+void RaycastingScene::update_vertices(std::uint32_t geometry, const py::handle& vertices) {
+  require_geometry("update_vertices", geometry);
+  std::vector<py::ssize_t> lead;
+  const FloatArray v = as_float_rows(vertices, "vertices", 3, lead);
+  accel_.update_vertices(geometry, v.data(), rows_of(lead));  // Error (count, NaN) -> ValueError
+  geometries_[geometry].xyz.assign(v.data(), v.data() + v.size());
+  dirty_ = true;
+}
+
+void RaycastingScene::set_geometry_mask(std::uint32_t geometry, std::uint32_t mask) {
+  require_geometry("set_geometry_mask", geometry);
+  accel_.set_geometry_mask(geometry, mask);
+  geometries_[geometry].mask = mask;
+  dirty_ = true;
+}
+
+void RaycastingScene::disable_geometry(std::uint32_t geometry) {
+  require_geometry("disable_geometry", geometry);
+  accel_.disable_geometry(geometry);
+  geometries_[geometry].enabled = false;
+  dirty_ = true;
+}
+
+void RaycastingScene::enable_geometry(std::uint32_t geometry) {
+  require_geometry("enable_geometry", geometry);
+  accel_.enable_geometry(geometry);
+  geometries_[geometry].enabled = true;
+  dirty_ = true;
+}
+
+const Accel& RaycastingScene::committed() {
+  if (dirty_) {
+    accel_.commit(options_);
+    dirty_ = false;
+  }
+  return accel_;
+}
+
+void RaycastingScene::normal_of(const Hit& h, float* n) const {
+  n[0] = n[1] = n[2] = 0.0f;
+  if (!h.hit()) return;
+  const RaycastingScene* owner = this;
+  const Geometry* inst = nullptr;
+  if (h.inst != kInvalidId) {
+    inst = &geometries_[h.inst];
+    owner = inst->prototype.get();
+  }
+  if (!owner || owner->loaded_ || h.geom >= owner->geometries_.size() || owner->geometries_[h.geom].indices.empty()) {
+    n[0] = n[1] = n[2] = kNaN;  // a polygon, or a loaded scene's geometry: not known here
+    return;
+  }
+  const Geometry& g = owner->geometries_[h.geom];
+  const std::uint32_t* t = &g.indices[3 * std::size_t{h.prim}];
+  unit_normal(&g.xyz[3 * t[0]], &g.xyz[3 * t[1]], &g.xyz[3 * t[2]], n);
+  if (inst) {
+    // Normals transform by the inverse transpose of A: its cofactor matrix, up to scale.
+    const float* a = inst->transform;
+    auto at = [&](int r, int c) { return a[4 * r + c]; };
+    float w[3];
+    for (int r = 0; r < 3; ++r) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+      float cof[3];
+      for (int c = 0; c < 3; ++c) {
+        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+        cof[c] = at(r1, c1) * at(r2, c2) - at(r1, c2) * at(r2, c1);
+      }
+      w[r] = cof[0] * n[0] + cof[1] * n[1] + cof[2] * n[2];
+    }
+    const float len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    for (int k = 0; k < 3; ++k) n[k] = len > 0 ? w[k] / len : 0.0f;
+  }
+}
+
+py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  auto t = new_array<float>(lead);
+  auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
+  auto uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
+  float *pt = t.mutable_data(), *puv = uvs.mutable_data(), *pn = normals.mutable_data();
+  std::uint32_t *pg = geometry_ids.mutable_data(), *pp = primitive_ids.mutable_data();
+  const float* in = r.data();
+  {
+    py::gil_scoped_release free;
+    parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+      const std::vector<Ray> chunk = to_rays(in + 6 * b, e - b, 0.0f, kInf);
+      std::vector<Hit> hits(e - b);
+      accel.intersect(chunk.data(), chunk.size(), hits.data());
+      for (std::size_t k = 0; k < hits.size(); ++k) {
+        const Hit& h = hits[k];
+        const std::size_t i = b + k;
+        pt[i] = h.t, pg[i] = h.geom, pp[i] = h.prim;
+        puv[2 * i] = h.hit() ? h.u : 0.0f, puv[2 * i + 1] = h.hit() ? h.v : 0.0f;
+        normal_of(h, pn + 3 * i);
+      }
+    });
+  }
+  py::dict out;
+  out["t_hit"] = t, out["geometry_ids"] = geometry_ids, out["primitive_ids"] = primitive_ids;
+  out["primitive_uvs"] = uvs, out["primitive_normals"] = normals;
+  return out;
+}
+
+py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  auto out = new_array<bool>(lead);
+  bool* po = out.mutable_data();
+  const float* in = r.data();
+  {
+    py::gil_scoped_release free;
+    parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+      const std::vector<Ray> chunk = to_rays(in + 6 * b, e - b, tnear, tfar);
+      std::vector<std::uint8_t> blocked(e - b);
+      accel.occluded(chunk.data(), chunk.size(), blocked.data());
+      for (std::size_t k = 0; k < blocked.size(); ++k) po[b + k] = blocked[k] != 0;
+    });
+  }
+  return out;
+}
+
+py::array RaycastingScene::count_intersections(const py::handle& rays, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  auto out = new_array<std::int32_t>(lead);
+  {
+    py::gil_scoped_release free;
+    const std::vector<Ray> all = to_rays(r.data(), n, 0.0f, kInf);
+    accel.count_intersections(all.data(), n, reinterpret_cast<std::uint32_t*>(out.mutable_data()), nthreads);
+  }
+  return out;
+}
+
+py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  HitLists lists;
+  {
+    py::gil_scoped_release free;
+    const std::vector<Ray> all = to_rays(r.data(), n, 0.0f, kInf);
+    lists = accel.intersect_all(all.data(), n, nthreads);
+  }
+  const auto k = static_cast<py::ssize_t>(lists.hits.size());
+  py::array_t<std::uint32_t> splits(static_cast<py::ssize_t>(n + 1)), ray_ids(k), geometry_ids(k), primitive_ids(k);
+  py::array_t<float> t(k), uvs(std::vector<py::ssize_t>{k, 2});
+  for (std::size_t i = 0; i <= n; ++i) splits.mutable_data()[i] = static_cast<std::uint32_t>(lists.offsets[i]);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t h = lists.offsets[i]; h < lists.offsets[i + 1]; ++h) ray_ids.mutable_data()[h] = static_cast<std::uint32_t>(i);
+  for (py::ssize_t h = 0; h < k; ++h) {
+    const Hit& x = lists.hits[h];
+    geometry_ids.mutable_data()[h] = x.geom, primitive_ids.mutable_data()[h] = x.prim, t.mutable_data()[h] = x.t;
+    uvs.mutable_data()[2 * h] = x.u, uvs.mutable_data()[2 * h + 1] = x.v;
+  }
+  py::dict out;
+  out["ray_splits"] = splits, out["ray_ids"] = ray_ids, out["geometry_ids"] = geometry_ids;
+  out["primitive_ids"] = primitive_ids, out["primitive_uvs"] = uvs, out["t_hit"] = t;
+  return out;
+}
+
+py::dict RaycastingScene::compute_closest_points(const py::handle& points, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  std::vector<ClosestPoint> cp(n);
+  {
+    py::gil_scoped_release free;
+    accel.closest_points(p.data(), n, cp.data(), kInf, nthreads);
+  }
+  auto pts = new_array<float>(lead, {3}), uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
+  auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) pts.mutable_data()[3 * i + k] = cp[i].found() ? cp[i].point[k] : kInf;
+    uvs.mutable_data()[2 * i] = cp[i].u, uvs.mutable_data()[2 * i + 1] = cp[i].v;
+    geometry_ids.mutable_data()[i] = cp[i].geom, primitive_ids.mutable_data()[i] = cp[i].prim;
+    normal_of(Hit{cp[i].distance, cp[i].u, cp[i].v, cp[i].prim, cp[i].geom}, normals.mutable_data() + 3 * i);
+  }
+  py::dict out;
+  out["points"] = pts, out["geometry_ids"] = geometry_ids, out["primitive_ids"] = primitive_ids;
+  out["primitive_uvs"] = uvs, out["primitive_normals"] = normals;
+  return out;
+}
+
+py::array RaycastingScene::compute_distance(const py::handle& points, int nthreads) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
+  const Accel& accel = committed();
+  auto out = new_array<float>(lead);
+  {
+    py::gil_scoped_release free;
+    accel.distances(p.data(), rows_of(lead), out.mutable_data(), false, nthreads);
+  }
+  return out;
+}
+
+py::array RaycastingScene::compute_signed_distance(const py::handle& points, int nthreads, int nsamples) {
+  check_threads(nthreads);
+  if (nsamples < 1) throw py::value_error("nsamples: expected 1 or more (volley needs one ray: the extra are ignored)");
+  std::vector<py::ssize_t> lead;
+  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
+  const Accel& accel = committed();
+  auto out = new_array<float>(lead);
+  {
+    py::gil_scoped_release free;
+    accel.distances(p.data(), rows_of(lead), out.mutable_data(), true, nthreads);
+  }
+  return out;
+}
+
+py::array RaycastingScene::compute_occupancy(const py::handle& points, int nthreads, int nsamples) {
+  check_threads(nthreads);
+  if (nsamples < 1) throw py::value_error("nsamples: expected 1 or more (volley needs one ray: the extra are ignored)");
+  std::vector<py::ssize_t> lead;
+  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
+  const Accel& accel = committed();
+  const std::size_t n = rows_of(lead);
+  auto out = new_array<float>(lead);
+  {
+    py::gil_scoped_release free;
+    std::vector<std::uint8_t> inside(n);
+    accel.contains(p.data(), n, inside.data(), nthreads);
+    for (std::size_t i = 0; i < n; ++i) out.mutable_data()[i] = inside[i] ? 1.0f : 0.0f;
+  }
+  return out;
+}
+
+py::dict RaycastingScene::info() {
+  const AccelInfo i = committed().info();
+  py::dict d;
+  d["triangles"] = i.triangles, d["degenerate"] = i.degenerate, d["geometries"] = i.geometries;
+  d["instances"] = i.instances, d["instanced_triangles"] = i.instanced_triangles, d["layers"] = i.layers;
+  d["nodes"] = i.nodes, d["leaves"] = i.leaves, d["depth"] = i.depth, d["bytes"] = i.bytes;
+  d["sah_cost"] = i.sah_cost, d["build_seconds"] = i.build_seconds, d["load_seconds"] = i.load_seconds;
+  d["loaded"] = i.loaded, d["refitted"] = i.refitted, d["width"] = i.width, d["block_width"] = i.block_width;
+  d["test"] = std::string(to_string(i.test)), d["isa"] = std::string(to_string(i.isa)), d["robust"] = i.robust;
+  return d;
+}
+
+void RaycastingScene::save(const std::string& path) { committed().save(path); }
+
+std::shared_ptr<RaycastingScene> RaycastingScene::load(const std::string& path) {
+  auto s = std::make_shared<RaycastingScene>("watertight", "auto");
+  s->accel_ = Accel::load(path);
+  const AccelInfo i = s->accel_.info();
+  s->options_.test = i.test, s->options_.isa = i.isa;
+  s->geometries_.resize(i.geometries);
+  s->loaded_ = true;
+  s->dirty_ = false;
+  return s;
+}
+
+py::tuple RaycastingScene::get_state() const {
+  if (loaded_) throw py::value_error("a scene from load() keeps no arrays to pickle: pickle the scene it was saved from");
+  py::list geometries;
+  for (const Geometry& g : geometries_) {
+    py::dict d;
+    if (g.prototype) {
+      d["prototype"] = g.prototype;
+      d["transform"] = py::array_t<float>(std::vector<py::ssize_t>{3, 4}, g.transform);
+    } else {
+      d["vertices"] = py::array_t<float>(std::vector<py::ssize_t>{py::ssize_t(g.xyz.size() / 3), 3}, g.xyz.data());
+      d["triangles"] = py::array_t<std::uint32_t>(std::vector<py::ssize_t>{py::ssize_t(g.indices.size() / 3), 3}, g.indices.data());
+    }
+    d["mask"] = g.mask, d["enabled"] = g.enabled;
+    geometries.append(d);
+  }
+  const std::string isa = options_.isa == Isa::automatic ? "auto" : std::string(to_string(options_.isa));
+  return py::make_tuple(1, std::string(to_string(options_.test)), isa, geometries);
+}
+
+std::shared_ptr<RaycastingScene> RaycastingScene::from_state(const py::tuple& state) {
+  if (state.size() != 4 || state[0].cast<int>() != 1) throw py::value_error("not a pickled volley.RaycastingScene (version 1)");
+  auto s = std::make_shared<RaycastingScene>(state[1].cast<std::string>(), state[2].cast<std::string>());
+  for (const py::handle& item : state[3].cast<py::list>()) {
+    const py::dict d = item.cast<py::dict>();
+    const std::uint32_t id = d.contains("prototype")
+                                 ? s->add_instance(d["prototype"].cast<std::shared_ptr<RaycastingScene>>(), d["transform"])
+                                 : s->add_triangles(d["vertices"], d["triangles"]);
+    if (d["mask"].cast<std::uint32_t>() != 0xffffffffu) s->set_geometry_mask(id, d["mask"].cast<std::uint32_t>());
+    if (!d["enabled"].cast<bool>()) s->disable_geometry(id);
+  }
+  return s;
+}
+
+}  // namespace volley::python

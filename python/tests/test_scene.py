@@ -1,0 +1,224 @@
+"""volley.RaycastingScene: Open3D's API and answers, errors that name the argument, the same
+answers as `volley trace` / `volley query` on the same files, pickling, and no leaks."""
+import os
+import pickle
+import resource
+import struct
+import subprocess
+import tempfile
+
+import numpy as np
+import pytest
+
+import volley
+
+# The unit box [0, 1]^3 as 12 triangles (consistently oriented, outward normals).
+BOX_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], np.float32)
+BOX_T = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                  [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]], np.uint32)
+
+
+def box_scene(**options):
+    s = volley.RaycastingScene(**options)
+    assert s.add_triangles(BOX_V, BOX_T) == 0
+    return s
+
+
+def test_cast_rays_hits_and_misses_as_open3d_reports_them():
+    s = box_scene()
+    rays = np.array([[0.5, 0.5, 5, 0, 0, -1], [0.25, 0.75, -3, 0, 0, 1], [5, 5, 5, 0, 0, 1]], np.float64)
+    a = s.cast_rays(rays)
+    assert a["t_hit"].dtype == np.float32 and a["t_hit"].shape == (3,)
+    np.testing.assert_array_equal(a["t_hit"][:2], [4.0, 3.0])
+    assert np.isinf(a["t_hit"][2])
+    assert a["geometry_ids"].tolist() == [0, 0, volley.INVALID_ID]
+    assert a["primitive_ids"][2] == volley.INVALID_ID
+    assert a["primitive_uvs"].shape == (3, 2) and a["primitive_normals"].shape == (3, 3)
+    np.testing.assert_allclose(a["primitive_normals"][0], [0, 0, 1])   # the top face, outward
+    np.testing.assert_allclose(a["primitive_normals"][1], [0, 0, -1])  # the bottom face
+    np.testing.assert_array_equal(a["primitive_normals"][2], [0, 0, 0])
+
+
+def test_leading_dimensions_and_layouts_are_kept():
+    s = box_scene()
+    rays = np.zeros((4, 5, 6), np.float32)
+    rays[..., 0:2] = 0.5
+    rays[..., 2] = 2
+    rays[..., 5] = -1
+    a = s.cast_rays(rays)
+    assert a["t_hit"].shape == (4, 5)
+    assert a["primitive_uvs"].shape == (4, 5, 2)
+    # A Fortran-ordered, strided float64 view answers the same.
+    b = s.cast_rays(np.asfortranarray(rays.astype(np.float64))[:, ::2])
+    np.testing.assert_array_equal(b["t_hit"], a["t_hit"][:, ::2])
+
+
+def test_occlusion_counts_and_lists_count_shared_edges_once():
+    s = box_scene()
+    # Straight down through the top face's diagonal (shared by two triangles) and the bottom's.
+    rays = np.array([[0.5, 0.5, 2, 0, 0, -1], [0.3, 0.6, 2, 0, 0, -1], [3, 3, 3, 1, 0, 0]], np.float32)
+    np.testing.assert_array_equal(s.count_intersections(rays), [2, 2, 0])
+    assert s.count_intersections(rays).dtype == np.int32
+    lst = s.list_intersections(rays)
+    np.testing.assert_array_equal(lst["ray_splits"], [0, 2, 4, 4])
+    np.testing.assert_array_equal(lst["ray_ids"], [0, 0, 1, 1])
+    np.testing.assert_array_equal(lst["t_hit"], [1, 2, 1, 2])
+    np.testing.assert_array_equal(s.test_occlusions(rays), [True, True, False])
+    np.testing.assert_array_equal(s.test_occlusions(rays, tfar=0.5), [False, False, False])
+
+
+def test_points_distances_and_occupancy():
+    s = box_scene()
+    pts = np.array([[0.5, 0.5, 0.5], [2, 0.5, 0.5], [0.5, 0.5, 0.9], [0.5, -1, 0.5]], np.float32)
+    np.testing.assert_allclose(s.compute_distance(pts), [0.5, 1.0, 0.1, 1.0], rtol=1e-6)
+    np.testing.assert_allclose(s.compute_signed_distance(pts), [-0.5, 1.0, -0.1, 1.0], rtol=1e-6)
+    np.testing.assert_array_equal(s.compute_occupancy(pts), [1, 0, 1, 0])
+    c = s.compute_closest_points(pts)
+    np.testing.assert_allclose(c["points"][1], [1, 0.5, 0.5])
+    np.testing.assert_allclose(c["primitive_normals"][1], [1, 0, 0], atol=1e-6)
+    assert c["geometry_ids"].tolist() == [0, 0, 0, 0]
+    for n in (1, 2, 3):
+        np.testing.assert_array_equal(s.compute_distance(pts, nthreads=n), s.compute_distance(pts))
+
+
+def test_bad_input_raises_value_error_naming_the_argument():
+    s = volley.RaycastingScene()
+    with pytest.raises(ValueError, match="vertices"):
+        s.add_triangles(np.zeros((4, 2)), BOX_T[:1])
+    with pytest.raises(ValueError, match="row 1"):
+        s.add_triangles(np.array([[0, 0, 0], [np.nan, 0, 0], [0, 1, 0]]), [[0, 1, 2]])
+    with pytest.raises(ValueError, match="triangles.*out of range"):
+        s.add_triangles(BOX_V, np.array([[0, 1, 8]]))
+    with pytest.raises(ValueError, match="triangles.*out of range"):
+        s.add_triangles(BOX_V, np.array([[0, -1, 2]]))
+    with pytest.raises(ValueError, match=r"triangles: expected shape \(M, 3\)"):
+        s.add_triangles(BOX_V, np.array([0, 1, 2]))
+    s.add_triangles(BOX_V, BOX_T)
+    with pytest.raises(ValueError, match=r"rays: expected shape \(\.\.\., 6\)"):
+        s.cast_rays(np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="query_points"):
+        s.compute_distance(np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="nthreads"):
+        s.cast_rays(np.zeros((1, 6)), nthreads=-2)
+    with pytest.raises(ValueError, match="test"):
+        volley.RaycastingScene(test="fast")
+    with pytest.raises(ValueError, match="geometry 7"):
+        s.update_vertices(7, BOX_V)
+    with pytest.raises(ValueError):
+        s.update_vertices(0, BOX_V[:5])  # another vertex count
+    plane = box_scene(test="plane")
+    with pytest.raises(ValueError, match="plane test"):
+        plane.compute_distance(np.zeros((1, 3)))
+    with pytest.raises(OSError, match="missing.obj"):
+        volley.read_triangle_mesh("/nonexistent/missing.obj")
+
+
+def test_instances_refit_options_and_info():
+    proto = box_scene()
+    s = volley.RaycastingScene(test="watertight", isa="auto")
+    m = np.array([[2, 0, 0, 10], [0, 2, 0, 0], [0, 0, 2, 0]], np.float32)
+    assert s.add_instance(proto, m) == 0
+    a = s.cast_rays(np.array([[11, 1, 5, 0, 0, -1]], np.float32))
+    assert a["t_hit"][0] == 3.0
+    np.testing.assert_allclose(a["primitive_normals"][0], [0, 0, 1], atol=1e-6)
+    info = s.info()
+    assert info["instances"] == 1 and info["instanced_triangles"] == 12
+    # Refit: move the box up by 1, the next query sees it.
+    b = box_scene(isa="scalar")
+    b.cast_rays(np.zeros((1, 6), np.float32))
+    b.update_vertices(0, BOX_V + np.float32([0, 0, 1]))
+    assert b.cast_rays(np.array([[0.5, 0.5, 5, 0, 0, -1]], np.float32))["t_hit"][0] == 3.0
+    assert b.info()["isa"] == "scalar"
+
+
+def test_pickle_and_save_load_give_the_same_answers(tmp_path):
+    s = box_scene()
+    s.set_geometry_mask(0, 3)
+    rays = np.random.default_rng(1).uniform(-1, 2, (500, 6)).astype(np.float32)
+    want = s.cast_rays(rays)
+    back = pickle.loads(pickle.dumps(s))
+    got = back.cast_rays(rays)
+    for k in ("t_hit", "geometry_ids", "primitive_ids", "primitive_uvs"):
+        np.testing.assert_array_equal(got[k], want[k])
+    path = str(tmp_path / "box.vacc")
+    s.save(path)
+    loaded = volley.RaycastingScene.load(path)
+    np.testing.assert_array_equal(loaded.cast_rays(rays)["t_hit"], want["t_hit"])
+    assert loaded.info()["loaded"]
+    with pytest.raises(ValueError, match="pickle"):
+        pickle.dumps(loaded)
+
+
+def write_vray(path, rays):
+    with open(path, "wb") as f:
+        f.write(b"VRAY" + struct.pack("<IQ", 1, len(rays)))
+        f.write(rays.astype("<f4").tobytes())
+
+
+def write_vpts(path, pts):
+    with open(path, "wb") as f:
+        f.write(b"VPTS" + struct.pack("<IQ", 1, len(pts)))
+        f.write(pts.astype("<f4").tobytes())
+
+
+def read_records(path, dtype, width=1):
+    with open(path, "rb") as f:
+        head = f.read(16)
+        n = struct.unpack("<Q", head[8:16])[0]
+        data = np.frombuffer(f.read(), dtype)
+    return data.reshape(n, width) if width > 1 else data
+
+
+@pytest.mark.skipif(not os.environ.get("VOLLEY_BINARY"), reason="VOLLEY_BINARY (the volley command) not set")
+def test_same_answers_as_the_command_line_bit_for_bit(tmp_path):
+    exe = os.environ["VOLLEY_BINARY"]
+    mesh = tmp_path / "box.obj"
+    with open(mesh, "w") as f:
+        f.writelines(f"v {x} {y} {z}\n" for x, y, z in BOX_V)
+        f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in BOX_T)
+    v, t = volley.read_triangle_mesh(str(mesh))
+    s = volley.RaycastingScene()
+    s.add_triangles(v, t)
+    rng = np.random.default_rng(5)
+    o = rng.uniform(-1, 2, (2000, 3))
+    d = rng.normal(size=(2000, 3))
+    rays6 = np.hstack([o, d]).astype(np.float32)
+    vray = np.hstack([o, np.zeros((2000, 1)), d, np.full((2000, 1), np.inf)]).astype(np.float32)
+    write_vray(tmp_path / "r.vray", vray)
+    subprocess.run([exe, "trace", str(mesh), "--rays", str(tmp_path / "r.vray"), "--reps", "1", "-o", str(tmp_path / "r.vhit")],
+                   check=True, capture_output=True)
+    hits = read_records(tmp_path / "r.vhit", np.dtype([("t", "<f4"), ("u", "<f4"), ("v", "<f4"), ("prim", "<u4"),
+                                                      ("geom", "<u4"), ("inst", "<u4")]))
+    a = s.cast_rays(rays6)
+    np.testing.assert_array_equal(a["t_hit"], hits["t"])
+    np.testing.assert_array_equal(a["primitive_ids"], hits["prim"])
+    subprocess.run([exe, "trace", str(mesh), "--rays", str(tmp_path / "r.vray"), "--reps", "1", "--count",
+                    "-o", str(tmp_path / "r.vcnt")], check=True, capture_output=True)
+    np.testing.assert_array_equal(s.count_intersections(rays6), read_records(tmp_path / "r.vcnt", "<u4"))
+    pts = rng.uniform(-0.5, 1.5, (3000, 3)).astype(np.float32)
+    write_vpts(tmp_path / "p.vpts", pts)
+    subprocess.run([exe, "query", str(mesh), "--points", str(tmp_path / "p.vpts"), "--op", "signed-distance", "--reps", "1",
+                    "-o", str(tmp_path / "p.vdst")], check=True, capture_output=True)
+    np.testing.assert_array_equal(s.compute_signed_distance(pts), read_records(tmp_path / "p.vdst", "<f4"))
+    subprocess.run([exe, "query", str(mesh), "--points", str(tmp_path / "p.vpts"), "--op", "contains", "--reps", "1",
+                    "-o", str(tmp_path / "p.vocc")], check=True, capture_output=True)
+    np.testing.assert_array_equal(s.compute_occupancy(pts), read_records(tmp_path / "p.vocc", "u1").astype(np.float32))
+
+
+def test_a_thousand_scenes_leak_nothing_and_outlive_their_arrays():
+    def cycle():
+        v = BOX_V.copy()
+        s = volley.RaycastingScene()
+        s.add_triangles(v, BOX_T.copy())
+        del v  # the scene keeps its own copy
+        s.cast_rays(np.array([[0.5, 0.5, 2, 0, 0, -1]], np.float32))
+        s.compute_distance(np.zeros((10, 3), np.float32))
+        return s.count_intersections(np.array([[0.5, 0.5, 2, 0, 0, -1]], np.float32))[0]
+
+    for _ in range(100):  # warm up allocators and caches
+        cycle()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for _ in range(1000):
+        assert cycle() == 2
+    grown_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+    assert grown_kib < 2048, f"1000 create/commit/query/destroy cycles grew the peak RSS by {grown_kib} KiB"
