@@ -4,11 +4,13 @@ PRESET ?= release
 BUILD  := build/$(PRESET)
 JOBS   ?= $(shell nproc)
 
-# Required to build; the optional ones enable the Embree side-by-side, plots,
-# instruction-count benchmarks and the perf/ scripts (python3).
+# Required to build (the Python package and its tests included); the optional ones enable
+# the Embree side-by-side, plots, instruction-count benchmarks, the perf/ scripts (python3)
+# and the Dask example (python3-distributed).
 DEPS     := cmake g++ make pkg-config libxsimd-dev libbenchmark-dev libglm-dev libstb-dev \
-            doctest-dev libtinyobjloader-dev nlohmann-json3-dev libtbb-dev libcli11-dev
-OPTIONAL := libembree-dev gnuplot-nox valgrind python3
+            doctest-dev libtinyobjloader-dev nlohmann-json3-dev libtbb-dev libcli11-dev \
+            python3-dev python3-numpy pybind11-dev python3-pytest
+OPTIONAL := libembree-dev gnuplot-nox valgrind python3 python3-distributed
 # The sanitizer builds and the fuzzers use clang with its runtimes and libFuzzer.
 SANITIZER_DEPS := clang libclang-rt-14-dev libfuzzer-14-dev
 SUDO     := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
