@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -16,6 +17,10 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+/// Rays per piece of a batch: the pieces' rays and hits stay in the cache, in buffers each
+/// thread keeps, between the caller's arrays and the kernel.
+constexpr std::size_t kPiece = 1024;
+
 /// Open3D's rays (ox oy oz dx dy dz per row) as volley's over [tnear, tfar).
 std::vector<Ray> to_rays(const float* r, std::size_t n, float tnear, float tfar) {
   std::vector<Ray> out(n);
@@ -23,21 +28,32 @@ std::vector<Ray> to_rays(const float* r, std::size_t n, float tnear, float tfar)
   return out;
 }
 
+/// The same into a buffer of this thread, for the piece rows [b, e).
+const Ray* piece_rays(const float* rows, std::size_t b, std::size_t e, float tnear, float tfar) {
+  thread_local Ray rays[kPiece];
+  const float* r = rows + 6 * b;
+  for (std::size_t i = 0; i < e - b; ++i, r += 6) rays[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
+  return rays;
+}
+
 void check_threads(int nthreads) {
   if (nthreads < 0) throw py::value_error("nthreads: expected 0 (all cores) or a positive count, got " + std::to_string(nthreads));
 }
 
-/// body(begin, end) over [0, n) in chunks of 1024: on all cores (nthreads = 0), this thread
-/// alone (1) or an arena of nthreads. Called without the GIL.
+/// body(begin, end) over [0, n) in pieces of at most kPiece: on all cores (nthreads = 0),
+/// this thread alone (1) or an arena of nthreads. Called without the GIL.
 template <class Body>
 void parallel(std::size_t n, int nthreads, Body&& body) {
-  if (nthreads == 1 || n <= 1024) {
-    body(std::size_t{0}, n);
+  auto pieces = [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; p += kPiece) body(p, std::min(e, p + kPiece));
+  };
+  if (nthreads == 1 || n <= kPiece) {
+    pieces(0, n);
     return;
   }
   auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
-                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kPiece),
+                      [&](const tbb::blocked_range<std::size_t>& r) { pieces(r.begin(), r.end()); });
   };
   if (nthreads == 0) {
     run();
@@ -198,10 +214,9 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
   {
     py::gil_scoped_release free;
     parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-      const std::vector<Ray> chunk = to_rays(in + 6 * b, e - b, 0.0f, kInf);
-      std::vector<Hit> hits(e - b);
-      accel.intersect(chunk.data(), chunk.size(), hits.data());
-      for (std::size_t k = 0; k < hits.size(); ++k) {
+      thread_local Hit hits[kPiece];
+      accel.intersect(piece_rays(in, b, e, 0.0f, kInf), e - b, hits);
+      for (std::size_t k = 0; k < e - b; ++k) {
         const Hit& h = hits[k];
         const std::size_t i = b + k;
         pt[i] = h.t, pg[i] = h.geom, pp[i] = h.prim;
@@ -227,11 +242,9 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
   const float* in = r.data();
   {
     py::gil_scoped_release free;
+    static_assert(sizeof(bool) == 1, "numpy bool is one byte");
     parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-      const std::vector<Ray> chunk = to_rays(in + 6 * b, e - b, tnear, tfar);
-      std::vector<std::uint8_t> blocked(e - b);
-      accel.occluded(chunk.data(), chunk.size(), blocked.data());
-      for (std::size_t k = 0; k < blocked.size(); ++k) po[b + k] = blocked[k] != 0;
+      accel.occluded(piece_rays(in, b, e, tnear, tfar), e - b, reinterpret_cast<std::uint8_t*>(po + b));
     });
   }
   return out;

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""The Python package's overhead against the C++ API on the same rays and points, one
+thread: cast_rays against `volley trace --mode stream` (Accel::intersect on a ray array)
+and compute_distance against `volley query --op distance` (Accel::distances), best of
+--reps each, alternating. Prints a markdown table with the CPU model.
+
+  PYTHONPATH=build/release/python /usr/bin/python3 perf/python_overhead.py ../shared/scenes/stanford-bunny.obj
+"""
+import argparse
+import os
+import subprocess
+import tempfile
+import time
+
+import numpy as np
+
+import volley
+
+
+def read_records(path, magic, dtype, width):
+    with open(path, "rb") as f:
+        head = f.read(16)
+        assert head[:4] == magic, path
+        n = int.from_bytes(head[8:16], "little")
+        return np.frombuffer(f.read(), dtype).reshape(n, width)
+
+
+def best_line(exe, args):
+    out = subprocess.run([exe] + args, check=True, capture_output=True, text=True).stdout
+    line = next(l for l in out.splitlines() if l.startswith(("trace:", "query:")))
+    return float(dict(kv.split("=", 1) for kv in line.split()[1:])["best_s"])
+
+
+def cpu_model():
+    with open("/proc/cpuinfo") as f:
+        return next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), "unknown CPU")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mesh")
+    ap.add_argument("--volley", default="build/release/volley")
+    ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=3, help="alternations of the C++ and the Python runs")
+    ap.add_argument("--workload", default="primary", choices=["primary", "diffuse"],
+                    help="the rays (diffuse: their tmin offset moved into the origin on both sides)")
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp(prefix="volley_py_")
+    rays_file, pts_file = os.path.join(tmp, "r.vray"), os.path.join(tmp, "p.vpts")
+    subprocess.run([a.volley, "rays", a.mesh, "--workload", a.workload, "--width", "1024", "--height", "1024", "-o",
+                    rays_file], check=True, capture_output=True)
+    subprocess.run([a.volley, "points", a.mesh, "-n", "1000000", "-o", pts_file], check=True, capture_output=True)
+    vray = read_records(rays_file, b"VRAY", np.float32, 8).copy()
+    # Open3D-style rays span [0, inf): a tmin offset moves into the origin, for both sides.
+    vray[:, 0:3] += vray[:, 3:4] * vray[:, 4:7]
+    vray[:, 3] = 0
+    vray[:, 7] = np.inf
+    with open(rays_file, "wb") as f:
+        f.write(b"VRAY" + (1).to_bytes(4, "little") + len(vray).to_bytes(8, "little") + vray.astype("<f4").tobytes())
+    rays = np.ascontiguousarray(np.hstack([vray[:, 0:3], vray[:, 4:7]]))
+    pts = np.ascontiguousarray(read_records(pts_file, b"VPTS", np.float32, 3))
+
+    vertices, triangles = volley.read_triangle_mesh(a.mesh)
+    scene = volley.RaycastingScene()
+    scene.add_triangles(vertices, triangles)
+    scene.cast_rays(rays[:16], nthreads=1)  # build
+
+    def py_best(fn):
+        times = []
+        for _ in range(a.reps):
+            t0 = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t0)
+        return min(times)
+
+    rows = {"cast_rays vs Accel::intersect(Ray*, n)": [[], []], "compute_distance vs Accel::distances": [[], []]}
+    for _ in range(a.rounds):
+        r = rows["cast_rays vs Accel::intersect(Ray*, n)"]
+        r[0].append(best_line(a.volley, ["trace", a.mesh, "--rays", rays_file, "--mode", "stream", "--threads", "1",
+                                         "--reps", str(a.reps)]))
+        r[1].append(py_best(lambda: scene.cast_rays(rays, nthreads=1)))
+        r = rows["compute_distance vs Accel::distances"]
+        r[0].append(best_line(a.volley, ["query", a.mesh, "--points", pts_file, "--op", "distance", "--threads", "1",
+                                         "--reps", str(a.reps)]))
+        r[1].append(py_best(lambda: scene.compute_distance(pts, nthreads=1)))
+    print(f"CPU: {cpu_model()}; mesh {a.mesh} ({len(triangles)} triangles); {len(rays)} {a.workload} rays / 1M points; one thread; "
+          f"best of {a.reps} x {a.rounds} alternating rounds\n")
+    print("| call | C++ ms | Python ms | Python overhead |\n|---|---|---|---|")
+    for name, (cpp, py) in rows.items():
+        c, p = min(cpp), min(py)
+        print(f"| {name} | {c * 1e3:.1f} | {p * 1e3:.1f} | {100 * (p / c - 1):+.1f}% |")
+
+
+if __name__ == "__main__":
+    main()
