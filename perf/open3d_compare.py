@@ -95,6 +95,14 @@ def main():
     p = o3d.core.Tensor(pts)
     r = o3d.core.Tensor(o3d_rays)
 
+    # volley's Python package, in this process, when it imports (PYTHONPATH=build/release/python).
+    try:
+        import volley as vpy
+        vs = vpy.RaycastingScene()
+        vs.add_triangles(*vpy.read_triangle_mesh(a.mesh))
+    except ImportError:
+        vs = None
+
     rows = []
     for op in a.ops:
         for t in a.threads:
@@ -122,14 +130,20 @@ def main():
                     agree = f"max |difference| {np.max(np.abs(ours - theirs)):.3g}"
                 n = len(pts)
             v_s = float(kv["best_s"])
-            rows.append((op, t, n, o3d_s, v_s, agree))
+            py_s = None
+            if vs is not None:
+                call = {"distance": vs.compute_distance, "signed-distance": vs.compute_signed_distance,
+                        "contains": vs.compute_occupancy, "count": vs.count_intersections}[op]
+                py_s = best_of(lambda: call(r.numpy() if op == "count" else pts, nthreads=t), a.reps)
+            rows.append((op, t, n, o3d_s, v_s, py_s, agree))
 
     print(f"CPU: {cpu_model()}; mesh {a.mesh} ({len(legacy.triangles)} triangles); Open3D {o3d.__version__}; "
           f"best of {a.reps}\n")
-    print("| query | threads | items | Open3D ms | volley ms | volley / Open3D speed | answers |")
-    print("|---|---|---|---|---|---|---|")
-    for op, t, n, o, v, agree in rows:
-        print(f"| {op} | {t} | {n} | {o * 1e3:.1f} | {v * 1e3:.1f} | {o / v:.2f}x | {agree} |")
+    print("| query | threads | items | Open3D ms | volley ms | volley / Open3D speed | volley Python ms (speed) | answers |")
+    print("|---|---|---|---|---|---|---|---|")
+    for op, t, n, o, v, p, agree in rows:
+        py = f"{p * 1e3:.1f} ({o / p:.2f}x)" if p else "-"
+        print(f"| {op} | {t} | {n} | {o * 1e3:.1f} | {v * 1e3:.1f} | {o / v:.2f}x | {py} | {agree} |")
 
 
 if __name__ == "__main__":
