@@ -31,7 +31,9 @@ class CMakeBuild(build_ext):
         shutil.copyfile(built[0], target)
 
 
+os.makedirs(os.path.join(ROOT, "build"), exist_ok=True)
 setup(
+    options={"egg_info": {"egg_base": "build"}},  # the metadata beside the other build outputs
     packages=["volley"],
     package_dir={"volley": "python/volley"},
     ext_modules=[Extension("volley._volley", sources=[])],
