@@ -63,6 +63,25 @@ void parallel(std::size_t n, int nthreads, Body&& body) {
   }
 }
 
+void check_samples(int nsamples) {
+  if (nsamples < 1) throw py::value_error("nsamples: expected 1 or more (volley needs one ray: the extra are ignored)");
+}
+
+/// The point queries with one float per point: `points` checked and converted, then
+/// fill(accel, xyz, n, out) without the GIL into an array shaped like the points' rows.
+template <class Fill>
+py::array float_per_point(const py::handle& points, int nthreads, const Accel& accel, Fill&& fill) {
+  check_threads(nthreads);
+  std::vector<py::ssize_t> lead;
+  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
+  auto out = new_array<float>(lead);
+  {
+    py::gil_scoped_release free;
+    fill(accel, p.data(), rows_of(lead), out.mutable_data());
+  }
+  return out;
+}
+
 TriangleTest parse_test(const std::string& s) {
   if (auto t = parse_triangle_test(s)) return *t;
   throw py::value_error("test: expected \"watertight\", \"moller\" or \"plane\", got \"" + s + "\"");
@@ -320,47 +339,25 @@ py::dict RaycastingScene::compute_closest_points(const py::handle& points, int n
 }
 
 py::array RaycastingScene::compute_distance(const py::handle& points, int nthreads) {
-  check_threads(nthreads);
-  std::vector<py::ssize_t> lead;
-  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
-  const Accel& accel = committed();
-  auto out = new_array<float>(lead);
-  {
-    py::gil_scoped_release free;
-    accel.distances(p.data(), rows_of(lead), out.mutable_data(), false, nthreads);
-  }
-  return out;
+  return float_per_point(points, nthreads, committed(), [&](const Accel& a, const float* xyz, std::size_t n, float* out) {
+    a.distances(xyz, n, out, false, nthreads);
+  });
 }
 
 py::array RaycastingScene::compute_signed_distance(const py::handle& points, int nthreads, int nsamples) {
-  check_threads(nthreads);
-  if (nsamples < 1) throw py::value_error("nsamples: expected 1 or more (volley needs one ray: the extra are ignored)");
-  std::vector<py::ssize_t> lead;
-  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
-  const Accel& accel = committed();
-  auto out = new_array<float>(lead);
-  {
-    py::gil_scoped_release free;
-    accel.distances(p.data(), rows_of(lead), out.mutable_data(), true, nthreads);
-  }
-  return out;
+  check_samples(nsamples);
+  return float_per_point(points, nthreads, committed(), [&](const Accel& a, const float* xyz, std::size_t n, float* out) {
+    a.distances(xyz, n, out, true, nthreads);
+  });
 }
 
 py::array RaycastingScene::compute_occupancy(const py::handle& points, int nthreads, int nsamples) {
-  check_threads(nthreads);
-  if (nsamples < 1) throw py::value_error("nsamples: expected 1 or more (volley needs one ray: the extra are ignored)");
-  std::vector<py::ssize_t> lead;
-  const FloatArray p = as_float_rows(points, "query_points", 3, lead);
-  const Accel& accel = committed();
-  const std::size_t n = rows_of(lead);
-  auto out = new_array<float>(lead);
-  {
-    py::gil_scoped_release free;
+  check_samples(nsamples);
+  return float_per_point(points, nthreads, committed(), [&](const Accel& a, const float* xyz, std::size_t n, float* out) {
     std::vector<std::uint8_t> inside(n);
-    accel.contains(p.data(), n, inside.data(), nthreads);
-    for (std::size_t i = 0; i < n; ++i) out.mutable_data()[i] = inside[i] ? 1.0f : 0.0f;
-  }
-  return out;
+    a.contains(xyz, n, inside.data(), nthreads);
+    for (std::size_t i = 0; i < n; ++i) out[i] = inside[i] ? 1.0f : 0.0f;
+  });
 }
 
 py::dict RaycastingScene::info() {
