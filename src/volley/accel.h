@@ -203,8 +203,8 @@ class VOLLEY_API Accel {
   // Batches: `threads` = 0 runs on the caller's oneTBB arena (all its threads; the default
   // arena otherwise), n >= 1 on exactly n threads (1: the calling thread alone).
 
-  /// Every hit along the ray with tmin <= t < tmax, nearest first (ties by geometry, then
-  /// primitive), through the layers `mask` selects: writes the first min(count, capacity)
+  /// Every hit along the ray with tmin <= t < tmax, nearest first (ties by instance,
+  /// geometry, primitive), through the layers `mask` selects: writes the first min(count, capacity)
   /// into `hits` (null allowed with capacity 0) and returns the count.
   std::size_t intersect_all(const Ray& ray, Hit* hits, std::size_t capacity, std::uint32_t mask = kMaskAll) const;
   /// intersect_all over `count` rays into lists (every hit of every ray).
