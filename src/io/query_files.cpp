@@ -87,7 +87,7 @@ HitLists read_hit_lists(const std::filesystem::path& file) {
   for (std::size_t i = 0; i < rays; ++i)
     if (lists.offsets[i + 1] < lists.offsets[i]) throw LoadError(file, "offset " + std::to_string(i + 1) + " is smaller than the one before");
   lists.hits.resize(hits);
-  std::memcpy(lists.hits.data(), words.data() + 2 * (rays + 1), hits * sizeof(Hit));
+  if (hits > 0) std::memcpy(lists.hits.data(), words.data() + 2 * (rays + 1), hits * sizeof(Hit));
   return lists;
 }
 
@@ -97,7 +97,7 @@ void write_hit_lists(const std::filesystem::path& file, const HitLists& lists) {
   for (std::size_t o : lists.offsets) words.insert(words.end(), {std::uint32_t(o), std::uint32_t(std::uint64_t(o) >> 32)});
   const std::size_t first = words.size();
   words.resize(first + 6 * lists.hits.size());
-  std::memcpy(words.data() + first, lists.hits.data(), lists.hits.size() * sizeof(Hit));
+  if (!lists.hits.empty()) std::memcpy(words.data() + first, lists.hits.data(), lists.hits.size() * sizeof(Hit));
   write_records<std::uint32_t>(file, "VALL", kVersion, words, "hit-list file",
                                lists.offsets.empty() ? 0 : lists.offsets.size() - 1);
 }
