@@ -82,6 +82,21 @@ py::array float_per_point(const py::handle& points, int nthreads, const Accel& a
   return out;
 }
 
+/// A rays argument (..., 6) checked and converted, with its leading shape and row count
+/// (nthreads checked too: every ray query takes both).
+struct RaysIn {
+  FloatArray rows;
+  std::vector<py::ssize_t> lead;
+  std::size_t n = 0;
+};
+RaysIn rays_in(const py::handle& rays, int nthreads) {
+  check_threads(nthreads);
+  RaysIn in;
+  in.rows = as_float_rows(rays, "rays", 6, in.lead);
+  in.n = rows_of(in.lead);
+  return in;
+}
+
 TriangleTest parse_test(const std::string& s) {
   if (auto t = parse_triangle_test(s)) return *t;
   throw py::value_error("test: expected \"watertight\", \"moller\" or \"plane\", got \"" + s + "\"");
@@ -219,22 +234,21 @@ void RaycastingScene::normal_of(const Hit& h, float* n) const {
 }
 
 py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
-  check_threads(nthreads);
-  std::vector<py::ssize_t> lead;
-  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const RaysIn in = rays_in(rays, nthreads);
+  const std::vector<py::ssize_t>& lead = in.lead;
+  const std::size_t n = in.n;
   const Accel& accel = committed();
-  const std::size_t n = rows_of(lead);
   auto t = new_array<float>(lead);
   auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
   auto uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
   float *pt = t.mutable_data(), *puv = uvs.mutable_data(), *pn = normals.mutable_data();
   std::uint32_t *pg = geometry_ids.mutable_data(), *pp = primitive_ids.mutable_data();
-  const float* in = r.data();
+  const float* rows = in.rows.data();
   {
     py::gil_scoped_release free;
     parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
       thread_local Hit hits[kPiece];
-      accel.intersect(piece_rays(in, b, e, 0.0f, kInf), e - b, hits);
+      accel.intersect(piece_rays(rows, b, e, 0.0f, kInf), e - b, hits);
       for (std::size_t k = 0; k < e - b; ++k) {
         const Hit& h = hits[k];
         const std::size_t i = b + k;
@@ -251,49 +265,46 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
 }
 
 py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads) {
-  check_threads(nthreads);
-  std::vector<py::ssize_t> lead;
-  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const RaysIn in = rays_in(rays, nthreads);
+  const std::vector<py::ssize_t>& lead = in.lead;
+  const std::size_t n = in.n;
   const Accel& accel = committed();
-  const std::size_t n = rows_of(lead);
   auto out = new_array<bool>(lead);
   bool* po = out.mutable_data();
-  const float* in = r.data();
+  const float* rows = in.rows.data();
   {
     py::gil_scoped_release free;
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
     parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-      accel.occluded(piece_rays(in, b, e, tnear, tfar), e - b, reinterpret_cast<std::uint8_t*>(po + b));
+      accel.occluded(piece_rays(rows, b, e, tnear, tfar), e - b, reinterpret_cast<std::uint8_t*>(po + b));
     });
   }
   return out;
 }
 
 py::array RaycastingScene::count_intersections(const py::handle& rays, int nthreads) {
-  check_threads(nthreads);
-  std::vector<py::ssize_t> lead;
-  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const RaysIn in = rays_in(rays, nthreads);
+  const std::vector<py::ssize_t>& lead = in.lead;
+  const std::size_t n = in.n;
   const Accel& accel = committed();
-  const std::size_t n = rows_of(lead);
   auto out = new_array<std::int32_t>(lead);
   {
     py::gil_scoped_release free;
-    const std::vector<Ray> all = to_rays(r.data(), n, 0.0f, kInf);
+    const std::vector<Ray> all = to_rays(in.rows.data(), n, 0.0f, kInf);
     accel.count_intersections(all.data(), n, reinterpret_cast<std::uint32_t*>(out.mutable_data()), nthreads);
   }
   return out;
 }
 
 py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthreads) {
-  check_threads(nthreads);
-  std::vector<py::ssize_t> lead;
-  const FloatArray r = as_float_rows(rays, "rays", 6, lead);
+  const RaysIn in = rays_in(rays, nthreads);
+  const std::vector<py::ssize_t>& lead = in.lead;
+  const std::size_t n = in.n;
   const Accel& accel = committed();
-  const std::size_t n = rows_of(lead);
   HitLists lists;
   {
     py::gil_scoped_release free;
-    const std::vector<Ray> all = to_rays(r.data(), n, 0.0f, kInf);
+    const std::vector<Ray> all = to_rays(in.rows.data(), n, 0.0f, kInf);
     lists = accel.intersect_all(all.data(), n, nthreads);
   }
   const auto k = static_cast<py::ssize_t>(lists.hits.size());
