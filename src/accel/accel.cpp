@@ -2,12 +2,14 @@
 // primitive kind at commit (none for a kind the scene lacks), answers queries.
 #include "volley/accel.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "accel/accel_impl.h"
+#include "accel/parallel.h"
 #include "simd/dispatch.h"
 
 namespace volley {
@@ -198,26 +200,46 @@ std::uint32_t Accel::occluded(const RayPacket<K>& rays, const std::uint32_t* mas
   return impl_->occluded(rays, masks);
 }
 
-void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits) const {
+namespace {
+
+/// Runs trace(begin, end) over a stream of `count` rays on `threads` (Accel's batch rule),
+/// in pieces of whole runs of 16 (the stream policy's runs stay as on one thread) of at
+/// least 1024 rays.
+template <class Trace>
+void stream_pieces(const char* caller, std::size_t count, int threads, Trace&& trace) {
+  constexpr std::size_t kRun = 16;
+  accel::for_chunks(
+      caller, (count + kRun - 1) / kRun, threads,
+      [&](std::size_t r0, std::size_t r1) { trace(r0 * kRun, std::min(count, r1 * kRun)); }, 64);
+}
+
+}  // namespace
+
+void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, int threads) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
-  impl_->intersect(rays, nullptr, count, hits);
+  stream_pieces("intersect", count, threads,
+                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, nullptr, e - b, hits + b); });
 }
 
-void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const {
+void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, int threads) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
-  impl_->occluded(rays, nullptr, count, blocked);
+  stream_pieces("occluded", count, threads,
+                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, nullptr, e - b, blocked + b); });
 }
 
-void Accel::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
+void Accel::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits, int threads) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
   if (!masks && count != 0) throw Error("intersect: masks is null (pass one mask per ray, or use the call without masks)");
-  impl_->intersect(rays, masks, count, hits);
+  stream_pieces("intersect", count, threads,
+                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, masks + b, e - b, hits + b); });
 }
 
-void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
+void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
+                     int threads) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
   if (!masks && count != 0) throw Error("occluded: masks is null (pass one mask per ray, or use the call without masks)");
-  impl_->occluded(rays, masks, count, blocked);
+  stream_pieces("occluded", count, threads,
+                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, masks + b, e - b, blocked + b); });
 }
 
 // The packet widths of the API.

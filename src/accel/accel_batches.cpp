@@ -5,36 +5,14 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "accel/accel_impl.h"
+#include "accel/parallel.h"
 
 namespace volley {
 namespace {
 
-/// Calls body(begin, end) over [0, count) in chunks: on the current arena (threads = 0),
-/// on the calling thread alone (1), or on an arena of `threads`.
-template <class Body>
-void for_chunks(const char* caller, std::size_t count, int threads, Body&& body) {
-  if (threads < 0) throw Error(std::string(caller) + ": threads must be >= 0 (0: the caller's oneTBB arena)");
-  if (count == 0) return;
-  if (threads == 1) {
-    body(std::size_t{0}, count);
-    return;
-  }
-  auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
-                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-  };
-  if (threads == 0) {
-    run();
-  } else {
-    tbb::task_arena arena(threads);
-    arena.execute(run);
-  }
-}
+using accel::for_chunks;
 
 /// The points' indices in Morton (Z-curve) order of their positions in the points' box, 10
 /// bits per axis: neighbours in the order are neighbours in space, so consecutive queries

@@ -44,6 +44,25 @@ using namespace volley::capi;
 
 extern "C" {
 
+volley_status volley_intersect_batch(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
+                                     size_t count, volley_hit* hits, int threads) {
+  return guarded("volley_intersect_batch", VOLLEY_ERROR_INTERNAL, [&] {
+    require_batch(scene, rays, "rays", hits, "hits", count, threads);
+    volley::Hit* out = reinterpret_cast<volley::Hit*>(hits);
+    masks ? scene->accel.intersect(as_cpp(rays), masks, count, out, threads)
+          : scene->accel.intersect(as_cpp(rays), count, out, threads);
+  });
+}
+
+volley_status volley_occluded_batch(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
+                                    size_t count, uint8_t* occluded, int threads) {
+  return guarded("volley_occluded_batch", VOLLEY_ERROR_INTERNAL, [&] {
+    require_batch(scene, rays, "rays", occluded, "occluded", count, threads);
+    masks ? scene->accel.occluded(as_cpp(rays), masks, count, occluded, threads)
+          : scene->accel.occluded(as_cpp(rays), count, occluded, threads);
+  });
+}
+
 volley_status volley_count_intersections(const volley_scene* scene, const volley_ray* rays, size_t count,
                                          uint32_t* counts, int threads) {
   return guarded("volley_count_intersections", VOLLEY_ERROR_INVALID_ARGUMENT, [&] {

@@ -116,7 +116,7 @@ void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* mas
 
 /// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms.
 ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
-                        const std::string& mode, int packet, bool occluded, bool crossings) {
+                        const std::string& mode, int packet, bool occluded, bool crossings, int threads) {
   const Ray* r = rays.data();
   if (crossings)
     return [&accel, r, masks](std::size_t begin, std::size_t end, Answers& out) {
@@ -127,6 +127,19 @@ ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const 
       if (packet == 4) trace_packets<4>(accel, r, masks, begin, end, occluded, out);
       else if (packet == 8) trace_packets<8>(accel, r, masks, begin, end, occluded, out);
       else trace_packets<16>(accel, r, masks, begin, end, occluded, out);
+    };
+  }
+  if (mode == "batch") {
+    // The whole file in one call; the library spreads it over `threads`.
+    return [&accel, r, masks, occluded, threads](std::size_t begin, std::size_t end, Answers& out) {
+      const std::uint32_t* m = masks ? masks + begin : nullptr;
+      if (occluded) {
+        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin, threads)
+          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin, threads);
+      } else {
+        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin, threads)
+          : accel.intersect(r + begin, end - begin, out.hits.data() + begin, threads);
+      }
     };
   }
   if (mode == "stream") {
@@ -151,10 +164,14 @@ ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const 
 }
 
 /// One timed pass over all rays, in kChunk chunks: on the calling thread for one thread
-/// (no scheduler in the measurement), else spread by oneTBB inside `arena`.
-double timed_pass(const ChunkTracer& trace, std::size_t count, int threads, tbb::task_arena& arena, Answers& out) {
+/// (no scheduler in the measurement), else spread by oneTBB inside `arena`; `whole`: in one
+/// call (the batch mode, which spreads the rays itself).
+double timed_pass(const ChunkTracer& trace, std::size_t count, int threads, tbb::task_arena& arena, Answers& out,
+                  bool whole) {
   const auto start = std::chrono::steady_clock::now();
-  if (threads == 1) {
+  if (whole) {
+    trace(0, count, out);
+  } else if (threads == 1) {
     for (std::size_t b = 0; b < count; b += kChunk) trace(b, std::min(count, b + kChunk), out);
   } else {
     arena.execute([&] {
@@ -187,8 +204,11 @@ Runner register_trace(CLI::App& app) {
       ->excludes(occluded)
       ->excludes(count);
   count->excludes(occluded);
-  cmd->add_option("--mode", args->mode, "single (one ray at a time), packet (SoA packets of consecutive rays), stream")
-      ->check(CLI::IsMember({"single", "packet", "stream"}))
+  cmd->add_option("--mode", args->mode,
+                  "single (one ray at a time), packet (SoA packets of consecutive rays), stream (the stream API,\n"
+                  "1024 rays a call, the calls spread over --threads), batch (the stream API on the whole file in\n"
+                  "one call with its thread count: the library spreads the rays)")
+      ->check(CLI::IsMember({"single", "packet", "stream", "batch"}))
       ->capture_default_str();
   cmd->add_option("--packet", args->packet, "Rays per packet in packet mode")
       ->check(CLI::IsMember({4, 8, 16}))
@@ -225,7 +245,7 @@ Runner register_trace(CLI::App& app) {
     tbb::task_arena arena(threads);
     const std::vector<std::uint32_t> masks(a.mask ? rays.size() : 0, a.mask.value_or(kMaskAll));
     const ChunkTracer trace =
-        make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded, crossings);
+        make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded, crossings, threads);
     Answers answers;
     if (a.occluded) answers.blocked.assign(rays.size(), 0);
     else if (a.count) answers.counts.assign(rays.size(), 0);
@@ -234,7 +254,7 @@ Runner register_trace(CLI::App& app) {
     const char* query = a.occluded ? "occluded" : a.count ? "count" : a.all ? "all" : "closest";
 
     std::vector<double> seconds;
-    for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers));
+    for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers, a.mode == "batch"));
     std::sort(seconds.begin(), seconds.end());
     const double best = seconds.front();
     const double median = seconds[seconds.size() / 2];

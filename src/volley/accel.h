@@ -186,14 +186,19 @@ class VOLLEY_API Accel {
   /// SSE4.2 / AVX2 only runs whose directions share one octant are (primary rays in 4x4
   /// blocks, shadow rays toward one light), others go ray by ray, which was faster for
   /// diffuse rays there (perf/traversal.md). Same answers as intersect(ray) per ray.
-  void intersect(const Ray* rays, std::size_t count, Hit* hits) const;
+  /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
+  /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in
+  /// pieces of whole runs (at least 1024 rays each), with the same answers. Error for
+  /// threads < 0.
+  void intersect(const Ray* rays, std::size_t count, Hit* hits, int threads = 1) const;
   /// Occlusion of a stream: blocked[i] = 1 when rays[i] is occluded, else 0. Regrouped as
   /// intersect(rays, count, hits).
-  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const;
+  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, int threads = 1) const;
   /// Streams with a mask per ray: masks[i] is rays[i]'s, as intersect(ray, mask). Throws
   /// Error for a null masks with count > 0.
-  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
-  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
+  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits, int threads = 1) const;
+  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
+                int threads = 1) const;
 
   // --- Beyond the first hit (docs/crossings.md) -------------------------------------
   // Crossing queries count every surface a ray passes through exactly once: with the

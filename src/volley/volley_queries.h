@@ -31,6 +31,18 @@ typedef struct volley_closest_point {
   uint32_t geom;  /**< geometry; VOLLEY_INVALID_ID when none was found */
 } volley_closest_point;
 
+/** Closest hits of `count` rays on `threads` threads (the batch rule above; 1: the calling
+ *  thread, as volley_intersect_stream): hits[i] answers rays[i] (every entry written), with
+ *  masks[i] its mask, or every object for masks = NULL. The same answers as
+ *  volley_intersect_stream(_masked) for any thread count. */
+VOLLEY_API volley_status volley_intersect_batch(const volley_scene* scene, const volley_ray* rays,
+                                                const uint32_t* masks, size_t count, volley_hit* hits, int threads);
+
+/** Occlusion of `count` rays on `threads` threads: occluded[i] = 1 when rays[i] is blocked,
+ *  else 0. As volley_intersect_batch otherwise. */
+VOLLEY_API volley_status volley_occluded_batch(const volley_scene* scene, const volley_ray* rays,
+                                               const uint32_t* masks, size_t count, uint8_t* occluded, int threads);
+
 /** The number of hits along each ray (tmin <= t < tmax): counts[i] for rays[i]. */
 VOLLEY_API volley_status volley_count_intersections(const volley_scene* scene, const volley_ray* rays, size_t count,
                                                     uint32_t* counts, int threads);

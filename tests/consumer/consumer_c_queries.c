@@ -38,6 +38,33 @@ static void check_hit_lists(const volley_scene* scene) {
   check(hits[0].geom == 1 && hits[1].geom == 0, "the flat list", 0);
 }
 
+/* The first-hit batches on several threads: the stream's answers. */
+static void check_batches(const volley_scene* scene) {
+  volley_ray rays[40];
+  volley_hit hits[40], stream[40];
+  uint8_t blocked[40], stream_blocked[40];
+  uint32_t masks[40];
+  for (int i = 0; i < 40; ++i) {
+    rays[i] = scene_ray(0);
+    rays[i].org[0] = -0.5f + 0.1f * (float)i;
+    rays[i].org[1] = 0.5f;
+    masks[i] = 0xffffffffu;
+  }
+  expect(volley_intersect_stream(scene, rays, 40, stream), VOLLEY_OK, "volley_intersect_stream");
+  expect(volley_intersect_batch(scene, rays, NULL, 40, hits, 2), VOLLEY_OK, "volley_intersect_batch");
+  for (int i = 0; i < 40; ++i)
+    check(hits[i].t == stream[i].t && hits[i].prim == stream[i].prim && hits[i].geom == stream[i].geom,
+          "a batch on 2 threads answers as the stream", i);
+  expect(volley_intersect_batch(scene, rays, masks, 40, hits, 0), VOLLEY_OK, "volley_intersect_batch");
+  for (int i = 0; i < 40; ++i) check(hits[i].t == stream[i].t, "a masked batch on the caller's arena", i);
+  expect(volley_occluded_stream(scene, rays, 40, stream_blocked), VOLLEY_OK, "volley_occluded_stream");
+  expect(volley_occluded_batch(scene, rays, NULL, 40, blocked, 3), VOLLEY_OK, "volley_occluded_batch");
+  for (int i = 0; i < 40; ++i) check(blocked[i] == stream_blocked[i], "occlusion on 3 threads answers as the stream", i);
+  expect(volley_intersect_batch(scene, rays, NULL, 40, hits, -1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_intersect_batch");
+  expect(volley_occluded_batch(scene, rays, NULL, 40, NULL, 1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_occluded_batch");
+  expect(volley_occluded_batch(scene, NULL, NULL, 0, NULL, 1), VOLLEY_OK, "volley_occluded_batch");
+}
+
 /* A closed box [0, 2]^3 of 12 triangles: inside/outside, distances and closest points. */
 static void check_points(void) {
   static const float box[] = {0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 0, 0, 2, 2, 0, 2, 2, 2, 2, 0, 2, 2};
@@ -71,6 +98,7 @@ void check_queries(void) {
   volley_scene* scene = make_scene();
   expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
   check_hit_lists(scene);
+  check_batches(scene);
   volley_scene_destroy(scene);
   check_points();
 }

@@ -172,3 +172,32 @@ TEST_CASE("threads: the C API's last error belongs to the thread that failed") {
   for (auto& th : threads) th.join();
   CHECK(wrong.load() == 0);
 }
+
+TEST_CASE("threads: the stream forms on 0, 2 and 3 threads give the one-thread answers bit for bit") {
+  const Soup soup = random_soup(3000, 79);
+  const std::vector<Ray> rays = mixed_rays(5000, 10.0f, 83);  // several pieces of 1024 and a partial run
+  const std::vector<std::uint32_t> masks(rays.size(), volley::kMaskAll);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const Accel accel = soup.accel(TriangleTest::watertight, isa);
+    std::vector<Hit> want(rays.size());
+    std::vector<std::uint8_t> want_blocked(rays.size());
+    accel.intersect(rays.data(), rays.size(), want.data());
+    accel.occluded(rays.data(), rays.size(), want_blocked.data());
+    for (int threads : {0, 2, 3}) {
+      CAPTURE(threads);
+      std::vector<Hit> hits(rays.size());
+      std::vector<std::uint8_t> blocked(rays.size(), 7);
+      accel.intersect(rays.data(), rays.size(), hits.data(), threads);
+      CHECK(std::memcmp(hits.data(), want.data(), hits.size() * sizeof(Hit)) == 0);
+      accel.intersect(rays.data(), masks.data(), rays.size(), hits.data(), threads);
+      CHECK(std::memcmp(hits.data(), want.data(), hits.size() * sizeof(Hit)) == 0);
+      accel.occluded(rays.data(), rays.size(), blocked.data(), threads);
+      CHECK(blocked == want_blocked);
+      accel.occluded(rays.data(), masks.data(), rays.size(), blocked.data(), threads);
+      CHECK(blocked == want_blocked);
+    }
+    std::vector<Hit> hits(rays.size());
+    CHECK_THROWS_AS(accel.intersect(rays.data(), rays.size(), hits.data(), -1), volley::Error);
+  }
+}

@@ -1,0 +1,37 @@
+// Splitting a batch over threads: the caller's oneTBB arena, the calling thread alone, or
+// an arena of the thread count asked for (the `threads` argument of Accel's batch forms).
+#pragma once
+#include <cstddef>
+#include <string>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "volley/accel.h"
+
+namespace volley::accel {
+
+/// Calls body(begin, end) over [0, count) in chunks of at least `grain`: on the current
+/// arena (threads = 0), on the calling thread alone (1), or on an arena of `threads`.
+/// Throws Error naming `caller` for threads < 0.
+template <class Body>
+void for_chunks(const char* caller, std::size_t count, int threads, Body&& body, std::size_t grain = 256) {
+  if (threads < 0) throw Error(std::string(caller) + ": threads must be >= 0 (0: the caller's oneTBB arena)");
+  if (count == 0) return;
+  if (threads == 1) {
+    body(std::size_t{0}, count);
+    return;
+  }
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  };
+  if (threads == 0) {
+    run();
+  } else {
+    tbb::task_arena arena(threads);
+    arena.execute(run);
+  }
+}
+
+}  // namespace volley::accel
