@@ -140,6 +140,8 @@ struct WideKernels {
   /// Every triangle hit with ray.tmin <= t < ray.tmax by the crossing test
   /// (detail::CrossingTestOf), appended to `out` in visiting order (prim = the block's id).
   static void all_hits(const View& bvh, const Ray& ray, std::vector<Hit>& out);
+  /// What the closest-hit (any_hit: occlusion) walk of one ray visits (no answer kept).
+  static WalkCounts walk_counts(const View& bvh, const Ray& ray, bool any_hit);
   /// all_hits for the active lanes of a packet: lane i's hits appended to out[i].
   static void all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out);
   /// The nearest point of the triangles to `query.p` within sqrt(query.d2) (point_walk.h).

@@ -9,6 +9,7 @@
 //   Q::kSureRange   the prepared ray carries the sure quotient range of the watertight
 //                   any-hit decision (PreparedRay::sure).
 //   q.bound(ray)    the upper end of the search on entry.
+//   q.node()        called at every interior node the walk tests (CountingRay counts them).
 //   q.leaf(pr, blocks, count, bound)
 //                   the leaf's triangles: LeafStep::narrowed after lowering `bound`,
 //                   LeafStep::done to end the walk, LeafStep::go_on otherwise.
@@ -73,6 +74,7 @@ struct ClosestHitRay {
   bool found = false;
 
   float bound(const Ray& ray) const { return hit.t < ray.tmax ? hit.t : ray.tmax; }
+  void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
                                        std::uint32_t count, float& bound) {
     Leaf::template intersect_inline<false>(pr, blocks, count, hit);
@@ -93,6 +95,7 @@ struct AnyHitRay {
   bool occluded = false;
 
   float bound(const Ray& ray) const { return ray.tmax; }
+  void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
                                        std::uint32_t count, float&) {
     if (!Leaf::occluded_inline(pr, blocks, count)) return LeafStep::go_on;
@@ -112,12 +115,33 @@ struct AllHitsRay {
   Sink& sink;
 
   float bound(const Ray& ray) const { return ray.tmax; }
+  void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
                                        std::uint32_t count, float&) {
     Leaf::all_inline(pr, blocks, count, sink);
     return LeafStep::go_on;
   }
   bool answer() const { return false; }
+};
+
+/// A single-ray query counted: the walk's interior nodes, leaves and their triangles go
+/// to `counts`, the answers are `inner`'s.
+template <class Kernels, class Query>
+struct CountingRay {
+  static constexpr bool kNearFirst = Query::kNearFirst;
+  static constexpr bool kSureRange = Query::kSureRange;
+  Query& inner;
+  WalkCounts& counts;
+
+  float bound(const Ray& ray) const { return inner.bound(ray); }
+  void node() { ++counts.nodes; }
+  LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks, std::uint32_t count, float& bound) {
+    ++counts.leaves;
+    for (std::uint32_t b = 0; b < count; ++b)
+      counts.triangles += static_cast<std::uint64_t>(used_lanes<typename Kernels::SingleArch>(blocks[b]));
+    return inner.leaf(pr, blocks, count, bound);
+  }
+  bool answer() const { return inner.answer(); }
 };
 
 /// Closest hits of a packet's lanes (hits.t on entry bounds each lane like tmax).

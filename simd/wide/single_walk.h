@@ -97,6 +97,7 @@ void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   for (;;) {
     if (!(ref & wide_ref::kLeafBit)) {
       // Interior: slab test of all eight children at once.
+      query.node();
       const WideNode<N>& node = wide_ref::node_at(nodes, ref);
       // The child references sit on the node's fourth cache line, read only after the slab
       // test: request it now, beside the three lines of boxes.
@@ -312,6 +313,22 @@ bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray
   const View& view = *static_cast<const View*>(bvh);
   detail::AnyHitRay<WideKernels> query;
   return trace_ray(view, ray, view.root, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+WalkCounts WideKernels<Arch, Test, Robust>::walk_counts(const View& view, const Ray& ray, bool any_hit) {
+  WalkCounts counts;
+  if (any_hit) {
+    detail::AnyHitRay<WideKernels> query;
+    detail::CountingRay<WideKernels, decltype(query)> counted{query, counts};
+    trace_ray(view, ray, view.root, counted);
+  } else {
+    Hit hit;
+    detail::ClosestHitRay<WideKernels> query{hit};
+    detail::CountingRay<WideKernels, decltype(query)> counted{query, counts};
+    trace_ray(view, ray, view.root, counted);
+  }
+  return counts;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>

@@ -242,6 +242,13 @@ void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t co
                 [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, masks + b, e - b, blocked + b); });
 }
 
+WalkCounts Accel::walk_counts(const Ray& ray, bool any_hit) const {
+  if (!impl_->committed) throw Error("walk_counts: call commit() after adding geometry");
+  if (!impl_->wide_only)
+    throw Error("walk_counts: only for a scene of triangles in one layer, without instances, on a SIMD ISA");
+  return impl_->wide_only->walk_counts(ray, any_hit);
+}
+
 // The packet widths of the API.
 template void Accel::intersect<4>(const RayPacket<4>&, HitPacket<4>&) const;
 template void Accel::intersect<8>(const RayPacket<8>&, HitPacket<8>&) const;

@@ -77,6 +77,9 @@ class WideAccelFor final : public WideAccel {
   }
   std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view_, rays); }
   void all_hits(const Ray& ray, std::vector<Hit>& out) const override { Kernels::all_hits(view_, ray, out); }
+  WalkCounts walk_counts(const Ray& ray, bool any_hit) const override {
+    return Kernels::walk_counts(view_, ray, any_hit);
+  }
   void all_hits(const RayPacket<16>& rays, std::vector<Hit>* out) const override { Kernels::all_hits(view_, rays, out); }
   void closest_point(core::PointQuery& query) const override { Kernels::closest_point(view_, query); }
 

@@ -83,6 +83,8 @@ class WideAccel {
   /// Every triangle hit with tmin <= t < tmax by the crossing test (the watertight test's
   /// exactly-once rule), appended to `out` in visiting order (prim = the triangle's id).
   virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;
+  /// What the single-ray walk visits for `ray` (closest hit, or any hit).
+  virtual WalkCounts walk_counts(const Ray& ray, bool any_hit) const = 0;
   /// The same for the active lanes of a packet: lane i's hits appended to out[i].
   virtual void all_hits(const RayPacket<16>& rays, std::vector<Hit>* out) const = 0;
   /// The nearest triangle point to query.p within sqrt(query.d2): updates `query`. Throws

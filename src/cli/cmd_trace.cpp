@@ -50,6 +50,7 @@ struct TraceArgs {
   bool occluded = false;
   bool count = false;  ///< --count: crossings per ray (.vcnt)
   bool all = false;    ///< --all: every hit per ray (.vall)
+  bool stats = false;  ///< --stats: the single-ray walk's visits per ray
   std::string mode = "single";
   int packet = 16;
   int threads = 0;
@@ -214,6 +215,9 @@ Runner register_trace(CLI::App& app) {
       ->check(CLI::IsMember({4, 8, 16}))
       ->capture_default_str();
   cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  cmd->add_flag("--stats", args->stats,
+                "Also count what the single-ray walk visits per ray (interior nodes, leaves, triangles; an\n"
+                "untimed pass; triangles in one layer on a SIMD ISA)");
   cmd->add_option("--reps", args->reps, "Timed repetitions; the best is reported")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
@@ -234,11 +238,13 @@ Runner register_trace(CLI::App& app) {
     const bool crossings = a.count || a.all;
     if (crossings && a.mode != "single")
       throw std::invalid_argument("--count and --all trace single rays: leave --mode at single (they have no packet or stream forms)");
+    if (a.stats && crossings) throw std::invalid_argument("--stats counts the closest-hit or occlusion walk: not with --count or --all");
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
     const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel), a.load);
     const Accel& accel = scene.accel();
     const AccelInfo info = accel.info();
+    if (a.stats) accel.walk_counts(Ray{}, a.occluded);  // says now, not after the timing, when it cannot count
     if (!a.save.empty()) accel.save(a.save);
 
     const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
@@ -289,6 +295,18 @@ Runner register_trace(CLI::App& app) {
                 test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
                 found, info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
     if (!a.save.empty()) std::printf("saved the structure to %s\n", a.save.c_str());
+    if (a.stats) {
+      // An untimed pass of the single-ray walk, counting what it visits.
+      WalkCounts sum;
+      for (const Ray& r : rays) {
+        const WalkCounts c = accel.walk_counts(r, a.occluded);
+        sum.nodes += c.nodes, sum.leaves += c.leaves, sum.triangles += c.triangles;
+      }
+      const double n = rays.empty() ? 1.0 : double(rays.size());
+      std::printf("walk: nodes/ray=%.3f leaves/ray=%.3f triangles/ray=%.3f (the single-ray walk, %s)\n",
+                  double(sum.nodes) / n, double(sum.leaves) / n, double(sum.triangles) / n,
+                  a.occluded ? "any hit" : "closest hit");
+    }
 
     if (!a.output.empty()) {
       if (a.count) {

@@ -242,6 +242,11 @@ class VOLLEY_API Accel {
 
   /// Facts about the committed structure.
   AccelInfo info() const;
+  /// What the single-ray walk visits for `ray` (closest hit, or occlusion with any_hit):
+  /// interior nodes, leaves and triangles, for comparing trees and traversals
+  /// (`volley trace --stats`). The answer is not kept. Error unless the scene is triangles
+  /// in one layer with no instances on a SIMD ISA (the wide BVH alone).
+  WalkCounts walk_counts(const Ray& ray, bool any_hit = false) const;
 
   /// Writes the committed structure to `path` (replacing a file there; written under
   /// `path`.tmp first, so a failed save leaves no partial file): the wide BVH and triangle

@@ -45,4 +45,13 @@ struct Hit {
 };
 static_assert(sizeof(Hit) == 24, "Hit is a .vhit record");
 
+/// What the single-ray walk of the wide BVH visits for one ray (Accel::walk_counts): the
+/// interior nodes whose children it tests, the leaves it opens and the triangles of their
+/// blocks (padding lanes left out).
+struct WalkCounts {
+  std::uint64_t nodes = 0;
+  std::uint64_t leaves = 0;
+  std::uint64_t triangles = 0;
+};
+
 }  // namespace volley

@@ -334,3 +334,42 @@ TEST_CASE("wide: packets and streams see polygons as single rays do") {
     }
   }
 }
+
+TEST_CASE("wide: walk_counts counts the single walk's nodes, leaves and triangles without changing answers") {
+  // One triangle: a root node over one leaf (the root box is tested, as the oracle's).
+  Soup one;
+  one.add({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  const Ray through{{0.2f, 0.2f, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+  const Ray away{{0.2f, 0.2f, 1.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const Accel accel = one.accel(TriangleTest::watertight, isa);
+    for (const bool any_hit : {false, true}) {
+      const volley::WalkCounts c = accel.walk_counts(through, any_hit);
+      CHECK(c.nodes == 1);
+      CHECK(c.leaves == 1);
+      CHECK(c.triangles == 1);
+    }
+    const volley::WalkCounts missed = accel.walk_counts(away);
+    CHECK((missed.nodes == 1 && missed.leaves == 0 && missed.triangles == 0));
+    CHECK(accel.intersect(through).hit());
+  }
+  // A soup: every ray that hits opened a leaf and tested a triangle; the tree culls most.
+  const Soup soup = random_soup(1500, 17);
+  const std::vector<Ray> rays = mixed_rays(200, 10.0f, 19);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const Accel accel = soup.accel(TriangleTest::watertight, isa);
+    std::uint64_t nodes = 0, leaves = 0, triangles = 0;
+    for (const Ray& r : rays) {
+      const volley::WalkCounts c = accel.walk_counts(r);
+      if (accel.intersect(r).hit()) CHECK((c.leaves >= 1 && c.triangles >= 1));
+      CHECK(c.triangles >= c.leaves);
+      CHECK(c.triangles <= 8 * 15 * c.leaves);  // blocks of 8, at most 15 per leaf
+      nodes += c.nodes, leaves += c.leaves, triangles += c.triangles;
+    }
+    CHECK(nodes > rays.size());
+    CHECK(triangles < soup.size() * rays.size() / 4);  // the tree culls
+  }
+  CHECK_THROWS_AS(soup.accel(TriangleTest::watertight, Isa::scalar).walk_counts(rays[0]), volley::Error);
+}

@@ -175,7 +175,8 @@ TEST_CASE("trace: every mode and thread count gives the same answers, and the li
     const fs::path& rays = occluded ? shadow : primary;
     const std::size_t count = io::read_rays(rays).size();
     std::vector<Hit> reference;
-    for (const std::string mode : {"single", "packet --packet 16", "packet --packet 8", "packet --packet 4", "stream"}) {
+    for (const std::string mode :
+         {"single", "packet --packet 16", "packet --packet 8", "packet --packet 4", "stream", "batch"}) {
       for (const int threads : {1, 2}) {
         CAPTURE(mode);
         CAPTURE(threads);
@@ -219,6 +220,27 @@ TEST_CASE("trace: every mode and thread count gives the same answers, and the li
       }
     }
   }
+}
+
+TEST_CASE("trace --stats: the walk's visits per ray; refused where the walk cannot count") {
+  const fs::path primary = temp_path("stats_primary.vray");
+  REQUIRE(run("rays " + kCornell + " --workload primary --width 20 --height 20 -o " + primary.string()).status == 0);
+  for (const char* query : {"", " --occluded"}) {
+    CAPTURE(query);
+    const Run r = run("trace " + kCornell + " --rays " + primary.string() + " --reps 1 --stats" + query);
+    REQUIRE(r.status == 0);
+    std::smatch m;
+    REQUIRE(std::regex_search(r.output, m, std::regex(R"(walk: nodes/ray=([0-9.]+) leaves/ray=([0-9.]+) triangles/ray=([0-9.]+))")));
+    CHECK(std::stod(m[1]) > 0.0);
+    CHECK(std::stod(m[2]) > 0.0);
+    CHECK(std::stod(m[3]) >= std::stod(m[2]));  // a leaf holds a triangle at least
+  }
+  const Run scalar = run("trace " + kCornell + " --rays " + primary.string() + " --reps 1 --stats --isa scalar");
+  CHECK(scalar.status == 1);
+  CHECK(has(scalar.output, "walk_counts: only for"));
+  const Run crossing = run("trace " + kCornell + " --rays " + primary.string() + " --reps 1 --stats --count");
+  CHECK(crossing.status == 1);
+  CHECK(has(crossing.output, "--stats counts the closest-hit or occlusion walk"));
 }
 
 TEST_CASE("trace and rays: bad input gives a clear message and a non-zero exit") {
