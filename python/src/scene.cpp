@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,7 +16,6 @@ namespace volley::python {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 /// Rays per piece of a batch: the pieces' rays and hits stay in the cache, in buffers each
 /// thread keeps, between the caller's arrays and the kernel.
@@ -108,13 +108,6 @@ Isa parse_isa_name(const std::string& s) {
   throw py::value_error("isa: expected \"auto\", \"scalar\", \"sse4.2\", \"avx2\" or \"avx512\", got \"" + s + "\"");
 }
 
-void unit_normal(const float* a, const float* b, const float* c, float* n) {
-  const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-  const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  for (int k = 0; k < 3; ++k) n[k] = len > 0 ? n[k] / len : 0.0f;
-}
-
 }  // namespace
 
 RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa) {
@@ -199,38 +192,14 @@ const Accel& RaycastingScene::committed() {
 }
 
 void RaycastingScene::normal_of(const Hit& h, float* n) const {
+  // Open3D's convention: zeros for a miss (and, as its cross products give, a degenerate
+  // triangle); the normal itself from the Accel, which also knows loaded scenes, polygons
+  // and instances.
   n[0] = n[1] = n[2] = 0.0f;
   if (!h.hit()) return;
-  const RaycastingScene* owner = this;
-  const Geometry* inst = nullptr;
-  if (h.inst != kInvalidId) {
-    inst = &geometries_[h.inst];
-    owner = inst->prototype.get();
-  }
-  if (!owner || owner->loaded_ || h.geom >= owner->geometries_.size() || owner->geometries_[h.geom].indices.empty()) {
-    n[0] = n[1] = n[2] = kNaN;  // a polygon, or a loaded scene's geometry: not known here
-    return;
-  }
-  const Geometry& g = owner->geometries_[h.geom];
-  const std::uint32_t* t = &g.indices[3 * std::size_t{h.prim}];
-  unit_normal(&g.xyz[3 * t[0]], &g.xyz[3 * t[1]], &g.xyz[3 * t[2]], n);
-  if (inst) {
-    // Normals transform by the inverse transpose of A: its cofactor matrix, up to scale.
-    const float* a = inst->transform;
-    auto at = [&](int r, int c) { return a[4 * r + c]; };
-    float w[3];
-    for (int r = 0; r < 3; ++r) {
-      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
-      float cof[3];
-      for (int c = 0; c < 3; ++c) {
-        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-        cof[c] = at(r1, c1) * at(r2, c2) - at(r1, c2) * at(r2, c1);
-      }
-      w[r] = cof[0] * n[0] + cof[1] * n[1] + cof[2] * n[2];
-    }
-    const float len = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    for (int k = 0; k < 3; ++k) n[k] = len > 0 ? w[k] / len : 0.0f;
-  }
+  const std::array<float, 3> g = accel_.geometric_normal(h);
+  if (std::isnan(g[0])) return;
+  n[0] = g[0], n[1] = g[1], n[2] = g[2];
 }
 
 py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {

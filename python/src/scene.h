@@ -64,7 +64,7 @@ class RaycastingScene {
   Options options_;
   Accel accel_;
   bool dirty_ = true;
-  bool loaded_ = false;  ///< from load(): geometry arrays unknown (normals NaN, not picklable)
+  bool loaded_ = false;  ///< from load(): geometry arrays unknown here (not picklable)
   std::vector<Geometry> geometries_;
 };
 

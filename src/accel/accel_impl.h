@@ -4,6 +4,7 @@
 // and one polygon engine, each only when the layer has that kind. A ray walks the layers
 // whose mask shares a bit with its own: triangles, then polygons bounded by their hit.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <functional>
@@ -50,6 +51,7 @@ struct Accel::Impl {
     bool moved = false;                  ///< update_vertices was called on it (a deforming mesh)
     std::uint32_t mask = kMaskAll;       ///< set_geometry_mask
     bool instance = false;               ///< an instance (add_instance): `index` is its place in `instances`
+    std::size_t packed_vertices = 0;     ///< a loaded triangle geometry's first vertex in Packed::vertices
   };
 
   /// One add_instance call: a prototype under an affine transform.
@@ -147,6 +149,10 @@ struct Accel::Impl {
     }
     attribute_search(prim, geom);
   }
+
+  /// The unit geometric normal of primitive `prim` of geometry `geom` in this Accel's space
+  /// (Accel::geometric_normal); NaN when there is no such primitive.
+  std::array<float, 3> local_normal(std::uint32_t geom, std::uint32_t prim) const;
 
   /// Triangles added (also while packed).
   std::size_t triangle_count() const { return packed ? loaded_triangles : triangle_ids.size(); }

@@ -37,11 +37,12 @@ void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Me
                   : (r.index != triangles || r.vertex_count > (std::uint64_t{1} << 40)))
       in.fail(which + " does not follow the ones before it");
     (r.polygon ? polygons : triangles) += r.count;
-    if (!r.polygon) vertex_total += r.vertex_count;
     disabled += !r.enabled;
     id += r.count;
     out.push_back({r.first, r.count, static_cast<std::size_t>(r.index), r.polygon != 0, r.enabled != 0, {},
                    static_cast<std::size_t>(r.vertex_count), r.moved != 0, r.mask});
+    out.back().packed_vertices = static_cast<std::size_t>(vertex_total);
+    if (!r.polygon) vertex_total += r.vertex_count;
   }
   if (triangles != meta.triangles || polygons != meta.polygons || id != meta.next_id || disabled != meta.disabled ||
       meta.degenerate > meta.triangles)

@@ -2,6 +2,7 @@
 // and streams, plus the ray check. The C structs have exactly the layout of the C++
 // types (asserted below), so packets and streams are handed to volley::Accel in place;
 // only a packet with a zero-direction lane, which the C API answers as a miss, is copied.
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -335,6 +336,16 @@ volley_status volley_occluded_stream_masked(const volley_scene* scene, const vol
                                             size_t count, uint8_t* occluded) {
   return stream_masked("volley_occluded_stream_masked", scene, rays, masks, count, occluded, "occluded",
                        [&] { scene->accel.occluded(as_cpp(rays), masks, count, occluded); });
+}
+
+volley_status volley_geometric_normal(const volley_scene* scene, const volley_hit* hit, float normal[3]) {
+  return guarded("volley_geometric_normal", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    require_pointer(hit, "hit");
+    require_pointer(normal, "normal");
+    const std::array<float, 3> n = scene->accel.geometric_normal(*reinterpret_cast<const volley::Hit*>(hit));
+    normal[0] = n[0], normal[1] = n[1], normal[2] = n[2];
+  });
 }
 
 volley_status volley_validate_rays(const volley_ray* rays, size_t count, size_t* first_invalid) {

@@ -1,5 +1,6 @@
 // volley public API: the acceleration structure an embedder builds and queries.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -239,6 +240,15 @@ class VOLLEY_API Accel {
   float signed_distance(const float point[3]) const;
   /// distance or signed_distance for `count` points.
   void distances(const float* xyz, std::size_t count, float* out, bool is_signed, int threads = 0) const;
+
+  /// The unit geometric normal of the primitive a hit names, in this Accel's space (through
+  /// the hit's instance when it has one: the prototype's normal under the inverse transpose
+  /// of the transform): normalize((p1 - p0) x (p2 - p0)) for a triangle of vertices p0 p1 p2
+  /// as added (Embree's Ng, normalized), the right-hand-rule normal of a polygon's vertex
+  /// order. The side the ray came from is not taken into account. NaN in every component
+  /// for a miss, for a hit naming nothing here, or for a degenerate triangle. Works on a
+  /// committed Accel (built or loaded).
+  std::array<float, 3> geometric_normal(const Hit& hit) const;
 
   /// Facts about the committed structure.
   AccelInfo info() const;

@@ -411,6 +411,13 @@ VOLLEY_API volley_status volley_intersect_stream(const volley_scene* scene, cons
 VOLLEY_API volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                                 uint8_t* occluded);
 
+/** The unit geometric normal of the primitive `hit` names, in the scene's space (through
+ *  the hit's instance): normalize((p1 - p0) x (p2 - p0)) for a triangle as added (Embree's
+ *  Ng, normalized), the right-hand-rule normal of a polygon. NaN in every component for a
+ *  miss or a hit naming nothing in this scene. Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL
+ *  argument), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_geometric_normal(const volley_scene* scene, const volley_hit* hit, float normal[3]);
+
 /** Checks rays without tracing them: VOLLEY_OK when every ray can hit something;
  *  VOLLEY_ERROR_INVALID_RAY for the first ray that is always a miss (non-finite origin or
  *  direction, NaN tmin or tmax, tmin >= tmax, zero direction), whose index goes to

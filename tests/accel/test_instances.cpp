@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -203,4 +204,58 @@ TEST_CASE("instances: disabled, masked, shared, and bad calls") {
   CHECK_THROWS_WITH_AS(other.add_instance(scene, left.data()), doctest::Contains("one level"), volley::Error);
   CHECK_THROWS_WITH_AS(scene.update_vertices(b, soup.xyz.data(), 3), doctest::Contains("an instance"), volley::Error);
   CHECK_THROWS_WITH_AS(scene.save("/tmp/volley_instances.vacc"), doctest::Contains("instances"), volley::Error);
+}
+
+TEST_CASE("geometric_normal: triangles as added, polygons, instances under the inverse transpose, loaded files") {
+  namespace fs = std::filesystem;
+  // A triangle in z = 1 wound counter-clockwise seen from +z, one wound the other way in
+  // z = 2, a degenerate one, and a polygon (a square in x = 5, normal +x by its order).
+  const float tris[] = {0, 0, 1, 1, 0, 1, 0, 1, 1,  0, 0, 2, 0, 1, 2, 1, 0, 2,  0, 0, 3, 1, 1, 3, 2, 2, 3};
+  const float square[] = {5, 0, 0, 5, 1, 0, 5, 1, 1, 5, 0, 1};
+  Accel a;
+  const std::uint32_t idx[] = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  const std::uint32_t g = a.add_triangles(tris, 9, idx, 3);
+  const std::uint32_t p = a.add_polygon(square, 4);
+  CHECK_THROWS_AS(a.geometric_normal(Hit{1.0f, 0, 0, 0, g}), volley::Error);
+  a.commit();
+  auto normal_is = [](std::array<float, 3> n, float x, float y, float z) {
+    return std::fabs(n[0] - x) < 1e-6f && std::fabs(n[1] - y) < 1e-6f && std::fabs(n[2] - z) < 1e-6f;
+  };
+  CHECK(normal_is(a.geometric_normal(Hit{1.0f, 0, 0, 0, g}), 0, 0, 1));
+  CHECK(normal_is(a.geometric_normal(Hit{1.0f, 0, 0, 1, g}), 0, 0, -1));
+  CHECK(std::isnan(a.geometric_normal(Hit{1.0f, 0, 0, 2, g})[0]));  // degenerate
+  CHECK(normal_is(a.geometric_normal(Hit{1.0f, 0, 0, 0, p}), 1, 0, 0));
+  CHECK(std::isnan(a.geometric_normal(Hit{})[0]));                 // a miss
+  CHECK(std::isnan(a.geometric_normal(Hit{1.0f, 0, 0, 9, g})[2]));  // no such primitive
+  CHECK(std::isnan(a.geometric_normal(Hit{1.0f, 0, 0, 0, 7})[1]));  // no such geometry
+  // A ray's hit names the primitive whose normal comes back.
+  const Hit down = a.intersect(Ray{{0.2f, 0.2f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY});
+  REQUIRE(down.hit());
+  CHECK(normal_is(a.geometric_normal(down), 0, 0, -1));  // the z = 2 triangle, wound clockwise from above
+
+  // Through an instance that scales x by 2 and rotates 90 degrees about z: a plane's normal
+  // follows the inverse transpose (a shear-free scale keeps axis normals on their axes).
+  Accel scene;
+  const float transform[12] = {0, -2, 0, 10,  2, 0, 0, 0,  0, 0, 1, 0};  // (x, y) -> (-2y + 10, 2x)
+  const std::uint32_t inst = scene.add_instance(a, transform);
+  scene.commit();
+  CHECK(normal_is(scene.geometric_normal(Hit{1.0f, 0, 0, 0, p, inst}), 0, 1, 0));  // +x turned to +y
+  CHECK(normal_is(scene.geometric_normal(Hit{1.0f, 0, 0, 0, g, inst}), 0, 0, 1));
+  const float skew[12] = {1, 1, 0, 0,  0, 1, 0, 0,  0, 0, 1, 0};  // x += y
+  Accel sheared;
+  const std::uint32_t s = sheared.add_instance(a, skew);
+  sheared.commit();
+  // The square x = 5 becomes the plane x - y = 5: normal (1, -1, 0) / sqrt 2.
+  CHECK(normal_is(sheared.geometric_normal(Hit{1.0f, 0, 0, 0, p, s}), float(M_SQRT1_2), -float(M_SQRT1_2), 0));
+
+  // A loaded Accel reads the vertices from its file.
+  const fs::path file = fs::temp_directory_path() / "volley_normals.vacc";
+  a.save(file.string());
+  const Accel loaded = Accel::load(file.string());
+  for (std::uint32_t prim = 0; prim < 3; ++prim) {
+    const auto want = a.geometric_normal(Hit{1.0f, 0, 0, prim, g}), got = loaded.geometric_normal(Hit{1.0f, 0, 0, prim, g});
+    for (int k = 0; k < 3; ++k) CHECK((got[k] == want[k] || (std::isnan(got[k]) && std::isnan(want[k]))));
+  }
+  CHECK(normal_is(loaded.geometric_normal(Hit{1.0f, 0, 0, 0, p}), 1, 0, 0));
+  fs::remove(file);
 }

@@ -60,6 +60,14 @@ static void check_batches(const volley_scene* scene) {
   expect(volley_occluded_stream(scene, rays, 40, stream_blocked), VOLLEY_OK, "volley_occluded_stream");
   expect(volley_occluded_batch(scene, rays, NULL, 40, blocked, 3), VOLLEY_OK, "volley_occluded_batch");
   for (int i = 0; i < 40; ++i) check(blocked[i] == stream_blocked[i], "occlusion on 3 threads answers as the stream", i);
+  for (int i = 0; i < 40; ++i) {
+    float n[3];
+    expect(volley_geometric_normal(scene, &hits[i], n), VOLLEY_OK, "volley_geometric_normal");
+    /* Straight-down rays meet horizontal surfaces only; a miss gives NaN. */
+    check(hits[i].prim == VOLLEY_INVALID_PRIM ? isnan(n[0]) : (n[0] == 0.0f && n[1] == 0.0f && fabsf(n[2]) == 1.0f),
+          "the geometric normal of a hit", i);
+  }
+  expect(volley_geometric_normal(scene, NULL, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_geometric_normal");
   expect(volley_intersect_batch(scene, rays, NULL, 40, hits, -1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_intersect_batch");
   expect(volley_occluded_batch(scene, rays, NULL, 40, NULL, 1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_occluded_batch");
   expect(volley_occluded_batch(scene, NULL, NULL, 0, NULL, 1), VOLLEY_OK, "volley_occluded_batch");

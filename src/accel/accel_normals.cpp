@@ -1,0 +1,63 @@
+// Accel::geometric_normal: the normal of the primitive a hit names, from the geometry as
+// added (also while a loaded Accel's input is still in its file), through instances.
+#include <cmath>
+#include <limits>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// v / |v|, NaN for a zero or non-finite length.
+std::array<float, 3> unit(const double v[3]) {
+  const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  if (!(len > 0.0) || !std::isfinite(len)) return {kNaN, kNaN, kNaN};
+  return {static_cast<float>(v[0] / len), static_cast<float>(v[1] / len), static_cast<float>(v[2] / len)};
+}
+
+}  // namespace
+
+std::array<float, 3> Accel::Impl::local_normal(std::uint32_t geom, std::uint32_t prim) const {
+  if (geom >= geometries.size()) return {kNaN, kNaN, kNaN};
+  const Geometry& g = geometries[geom];
+  if (g.instance || prim >= g.count) return {kNaN, kNaN, kNaN};
+  if (g.polygon) {
+    const core::Polygon& p = polygons[g.index];
+    const double n[3] = {p.normal.x, p.normal.y, p.normal.z};
+    return unit(n);
+  }
+  // The three vertices: from the copies (built, or unpacked), or from the mapped file.
+  double v[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const float* x;
+    if (packed) {
+      const std::uint32_t index = packed->indices[3 * (g.index + prim) + static_cast<std::size_t>(k)];
+      x = &packed->vertices[3 * (g.packed_vertices + index)];
+    } else {
+      x = &triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
+    }
+    for (int a = 0; a < 3; ++a) v[k][a] = x[a];
+  }
+  const double e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+  const double e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+  const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  return unit(n);
+}
+
+std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
+  if (!impl_->committed) throw Error("geometric_normal: call commit() after adding geometry");
+  if (!hit.hit()) return {kNaN, kNaN, kNaN};
+  if (hit.inst == kInvalidId) return impl_->local_normal(hit.geom, hit.prim);
+  if (hit.inst >= impl_->geometries.size() || !impl_->geometries[hit.inst].instance) return {kNaN, kNaN, kNaN};
+  const Impl::Instance& in = impl_->instances[impl_->geometries[hit.inst].index];
+  const std::array<float, 3> n = in.prototype->local_normal(hit.geom, hit.prim);
+  // Normals map by the inverse transpose: world n = A^-T n_object, A^-1 being to_object's 3x3.
+  const float* m = in.to_object;
+  double w[3];
+  for (int c = 0; c < 3; ++c) w[c] = double(m[c]) * n[0] + double(m[4 + c]) * n[1] + double(m[8 + c]) * n[2];
+  return unit(w);
+}
+
+}  // namespace volley
