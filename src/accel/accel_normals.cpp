@@ -29,21 +29,31 @@ std::array<float, 3> Accel::Impl::local_normal(std::uint32_t geom, std::uint32_t
     return unit(n);
   }
   // The three vertices: from the copies (built, or unpacked), or from the mapped file.
-  double v[3][3];
+  const float* v[3];
   for (int k = 0; k < 3; ++k) {
-    const float* x;
     if (packed) {
       const std::uint32_t index = packed->indices[3 * (g.index + prim) + static_cast<std::size_t>(k)];
-      x = &packed->vertices[3 * (g.packed_vertices + index)];
+      v[k] = &packed->vertices[3 * (g.packed_vertices + index)];
     } else {
-      x = &triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
+      v[k] = &triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
     }
-    for (int a = 0; a < 3; ++a) v[k][a] = x[a];
   }
-  const double e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
-  const double e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
-  const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-  return unit(n);
+  // In float (Python asks for a normal per hit), in double where float over- or underflows.
+  const float e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+  const float e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+  const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  const float len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  if (len2 > 0x1p-100f && len2 < 0x1p100f) {
+    const float s = 1.0f / std::sqrt(len2);
+    return {n[0] * s, n[1] * s, n[2] * s};
+  }
+  double d[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) d[k][a] = v[k][a];
+  const double f1[3] = {d[1][0] - d[0][0], d[1][1] - d[0][1], d[1][2] - d[0][2]};
+  const double f2[3] = {d[2][0] - d[0][0], d[2][1] - d[0][1], d[2][2] - d[0][2]};
+  const double m[3] = {f1[1] * f2[2] - f1[2] * f2[1], f1[2] * f2[0] - f1[0] * f2[2], f1[0] * f2[1] - f1[1] * f2[0]};
+  return unit(m);
 }
 
 std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
