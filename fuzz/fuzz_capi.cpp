@@ -181,9 +181,9 @@ bool same_bits(const volley_hit& a, const volley_hit& b) { return std::memcmp(&a
 /// `got` and `want` answer the same ray alike: both miss, or the same primitive of the same
 /// geometry at the same t
 /// (and u, v when `exact`), or two prims within 2 ulps of t (a coplanar tie). The plane and
-/// Möller tests: within 32 ulps, a known defect left open in session 11: on a ray from ~1e6
-/// away the packet forms kept a hit 12 ulps farther than the single-ray form's nearer one
-/// (each triangle alone is answered alike by both; the watertight test agrees throughout).
+/// Möller tests: within 32 ulps, for their false hits beside an edge, which a walk keeps or
+/// culls by the order it opens leaves (docs/accuracy.md, "Known traps": a ray from ~1e6
+/// away, a sliver with a vertex at 1e30; the watertight test agrees throughout).
 bool agree(const volley_hit& got, const volley_hit& want, bool exact) {
   const bool got_hit = got.prim != VOLLEY_INVALID_PRIM, want_hit = want.prim != VOLLEY_INVALID_PRIM;
   if (got_hit != want_hit) return false;
