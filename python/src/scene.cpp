@@ -1,15 +1,12 @@
 #include "scene.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "accel/parallel.h"
 #include "arrays.h"
 
 namespace volley::python {
@@ -41,26 +38,13 @@ void check_threads(int nthreads) {
 }
 
 /// body(begin, end) over [0, n) in pieces of at most kPiece: on all cores (nthreads = 0),
-/// this thread alone (1) or an arena of nthreads. Called without the GIL.
+/// this thread alone (1) or an arena of nthreads (Accel's batch rule). Called without the GIL.
 template <class Body>
 void parallel(std::size_t n, int nthreads, Body&& body) {
   auto pieces = [&](std::size_t b, std::size_t e) {
     for (std::size_t p = b; p < e; p += kPiece) body(p, std::min(e, p + kPiece));
   };
-  if (nthreads == 1 || n <= kPiece) {
-    pieces(0, n);
-    return;
-  }
-  auto run = [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kPiece),
-                      [&](const tbb::blocked_range<std::size_t>& r) { pieces(r.begin(), r.end()); });
-  };
-  if (nthreads == 0) {
-    run();
-  } else {
-    tbb::task_arena arena(nthreads);
-    arena.execute(run);
-  }
+  accel::for_chunks("nthreads", n, n <= kPiece ? 1 : nthreads, pieces, kPiece);
 }
 
 void check_samples(int nsamples) {
