@@ -130,28 +130,18 @@ ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const 
       else trace_packets<16>(accel, r, masks, begin, end, occluded, out);
     };
   }
-  if (mode == "batch") {
-    // The whole file in one call; the library spreads it over `threads`.
-    return [&accel, r, masks, occluded, threads](std::size_t begin, std::size_t end, Answers& out) {
+  if (mode == "stream" || mode == "batch") {
+    // The stream API: on the calling thread (stream: the chunks are spread over threads by
+    // the caller), or on `threads` (batch: the whole file in one call, the library spreads it).
+    const int api_threads = mode == "batch" ? threads : 1;
+    return [&accel, r, masks, occluded, api_threads](std::size_t begin, std::size_t end, Answers& out) {
       const std::uint32_t* m = masks ? masks + begin : nullptr;
       if (occluded) {
-        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin, threads)
-          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin, threads);
+        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin, api_threads)
+          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin, api_threads);
       } else {
-        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin, threads)
-          : accel.intersect(r + begin, end - begin, out.hits.data() + begin, threads);
-      }
-    };
-  }
-  if (mode == "stream") {
-    return [&accel, r, masks, occluded](std::size_t begin, std::size_t end, Answers& out) {
-      const std::uint32_t* m = masks ? masks + begin : nullptr;
-      if (occluded) {
-        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin)
-          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin);
-      } else {
-        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin)
-          : accel.intersect(r + begin, end - begin, out.hits.data() + begin);
+        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin, api_threads)
+          : accel.intersect(r + begin, end - begin, out.hits.data() + begin, api_threads);
       }
     };
   }
