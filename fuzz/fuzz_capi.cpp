@@ -415,6 +415,23 @@ std::vector<volley_hit> trace_all_forms(const volley_scene* scene, const std::ve
     }
     if (blocked[i] != (single[i].prim != VOLLEY_INVALID_PRIM ? 1 : 0)) finding("stream occlusion disagrees", i);
   }
+  // The batch forms on 2 threads: the stream's answers bit for bit (the same runs of 16).
+  std::vector<volley_hit> batch(rays.size());
+  std::vector<std::uint8_t> batch_blocked(rays.size(), 7);
+  if (volley_intersect_batch(scene, rays.data(), nullptr, rays.size(), batch.data(), 2) != VOLLEY_OK ||
+      volley_occluded_batch(scene, rays.data(), nullptr, rays.size(), batch_blocked.data(), 2) != VOLLEY_OK)
+    finding("batch query failed", 0);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (!same_bits(batch[i], stream[i])) finding("batch disagrees with stream", i);
+    if (batch_blocked[i] != blocked[i]) finding("batch occlusion disagrees with stream", i);
+    // A hit's geometric normal: unit length or NaN (a degenerate or non-finite triangle);
+    // a miss's: NaN.
+    float n[3];
+    if (volley_geometric_normal(scene, &single[i], n) != VOLLEY_OK) finding("geometric_normal failed", i);
+    const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+    if (single[i].prim == VOLLEY_INVALID_PRIM ? !std::isnan(n[0]) : !(std::isnan(n[0]) || std::fabs(len - 1.0) < 1e-5))
+      finding("geometric_normal is neither unit nor NaN", i);
+  }
   return single;
 }
 
