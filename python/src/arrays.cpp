@@ -1,6 +1,9 @@
 #include "arrays.h"
 
 #include <cmath>
+#include <cstdlib>
+#include <mutex>
+#include <new>
 #include <stdexcept>
 
 namespace volley::python {
@@ -13,7 +16,58 @@ std::string shape_text(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
+/// The buffers freed answer arrays left, by size. Never destroyed: an array may be freed
+/// after the module's statics are gone.
+struct BufferCache {
+  static constexpr std::size_t kMaxBuffers = 8;
+  static constexpr std::size_t kMaxBytes = std::size_t{256} << 20;
+  std::mutex mutex;
+  std::vector<void*> kept;
+  std::size_t bytes = 0;
+};
+BufferCache& cache() {
+  static BufferCache* c = new BufferCache;
+  return *c;
+}
+
+/// Each buffer starts with a 64-byte header that holds its size; the data follows.
+constexpr std::size_t kHeader = 64;
+std::size_t size_of(void* block) { return *static_cast<std::size_t*>(block); }
+
 }  // namespace
+
+void* take_buffer(std::size_t bytes) {
+  BufferCache& c = cache();
+  {
+    const std::lock_guard<std::mutex> lock(c.mutex);
+    for (std::size_t i = 0; i < c.kept.size(); ++i) {
+      if (size_of(c.kept[i]) != bytes) continue;
+      void* block = c.kept[i];
+      c.kept.erase(c.kept.begin() + static_cast<std::ptrdiff_t>(i));
+      c.bytes -= bytes;
+      return static_cast<char*>(block) + kHeader;
+    }
+  }
+  void* block = std::aligned_alloc(64, (kHeader + bytes + 63) / 64 * 64);
+  if (!block) throw std::bad_alloc();
+  *static_cast<std::size_t*>(block) = bytes;
+  return static_cast<char*>(block) + kHeader;
+}
+
+void release_buffer(void* data) {
+  void* block = static_cast<char*>(data) - kHeader;
+  const std::size_t bytes = size_of(block);
+  BufferCache& c = cache();
+  {
+    const std::lock_guard<std::mutex> lock(c.mutex);
+    if (c.kept.size() < BufferCache::kMaxBuffers && c.bytes + bytes <= BufferCache::kMaxBytes) {
+      c.kept.push_back(block);
+      c.bytes += bytes;
+      return;
+    }
+  }
+  std::free(block);
+}
 
 FloatArray as_float_rows(const py::handle& obj, const char* name, py::ssize_t width, std::vector<py::ssize_t>& leading) {
   const py::array raw = py::array::ensure(obj);

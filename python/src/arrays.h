@@ -25,12 +25,28 @@ FloatArray as_float_rows(const py::handle& obj, const char* name, py::ssize_t wi
 /// The same for an (M, 3) index array of integers, each below `limit`.
 IndexArray as_triangles(const py::handle& obj, const char* name, std::size_t limit);
 
-/// A new array of `leading` + `tail` dimensions.
+/// Memory for an answer array of `bytes` (>= kReusedBytes): a buffer a freed answer array
+/// left, when one of that size is kept, else a fresh one. Freed with release_buffer.
+void* take_buffer(std::size_t bytes);
+/// Keeps a buffer take_buffer gave for the next answer of its size (a few are kept, up to
+/// 256 MiB in all), or frees it.
+void release_buffer(void* data);
+/// Answers this large go through take_buffer: a program that asks the same query again
+/// writes into pages it already has, instead of pages the kernel must zero and map first
+/// (perf/queries.md: a fifth of cast_rays' time on 1M rays).
+inline constexpr std::size_t kReusedBytes = std::size_t{1} << 20;
+
+/// A new array of `leading` + `tail` dimensions (contents undefined).
 template <class T>
 py::array_t<T> new_array(const std::vector<py::ssize_t>& leading, std::initializer_list<py::ssize_t> tail = {}) {
   std::vector<py::ssize_t> shape = leading;
   shape.insert(shape.end(), tail.begin(), tail.end());
-  return py::array_t<T>(shape);
+  std::size_t bytes = sizeof(T);
+  for (py::ssize_t d : shape) bytes *= static_cast<std::size_t>(d);
+  if (bytes < kReusedBytes) return py::array_t<T>(shape);
+  void* data = take_buffer(bytes);
+  py::capsule owner(data, [](void* p) { release_buffer(p); });
+  return py::array_t<T>(shape, static_cast<T*>(data), owner);
 }
 
 /// The number of rows that `leading` describes.
