@@ -22,11 +22,13 @@ bool same_octant(const Ray* rays, std::size_t n) {
 }
 
 /// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
-/// (Accel::Impl::stream_packets), and AVX-512 (packets of any octants pay there) or one
-/// octant.
+/// (Accel::Impl::stream_packets), and one octant, or on AVX-512 any octants where the walk
+/// needs no order (occlusion, every hit): closest-hit runs of mixed octants (diffuse rays)
+/// went faster ray by ray there too, occlusion runs straddling an axis plane (shadow rays)
+/// as packets (perf/rays.md).
 template <class Impl>
-bool as_packet(const Impl& impl, const Ray* rays, std::size_t n) {
-  return n == 16 && impl.stream_packets && (impl.isa == Isa::avx512 || same_octant(rays, n));
+bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered) {
+  return n == 16 && impl.stream_packets && ((impl.isa == Isa::avx512 && !ordered) || same_octant(rays, n));
 }
 
 }  // namespace
@@ -35,7 +37,7 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     const std::uint32_t* m = masks ? masks + first : nullptr;
-    if (as_packet(*this, rays + first, n)) {
+    if (as_packet(*this, rays + first, n, true)) {
       RayPacket<16> p;
       volley::load(p, rays + first, 16);
       HitPacket<16> h;
@@ -52,7 +54,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     const std::uint32_t* m = masks ? masks + first : nullptr;
-    if (as_packet(*this, rays + first, n)) {
+    if (as_packet(*this, rays + first, n, false)) {
       RayPacket<16> p;
       volley::load(p, rays + first, 16);
       const std::uint32_t mask = occluded(p, m);
@@ -67,7 +69,7 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     std::vector<Hit>* lanes = out + first;
-    if (!as_packet(*this, rays + first, n)) {
+    if (!as_packet(*this, rays + first, n, false)) {
       for (std::size_t i = 0; i < n; ++i) all_hits(rays[first + i], kMaskAll, lanes[i]);
       continue;
     }

@@ -181,12 +181,11 @@ class VOLLEY_API Accel {
 
   /// Closest hits of a stream of `count` rays: hits[i] answers rays[i] (a miss where
   /// nothing is hit; every entry written). Policy: the stream is cut into runs of 16
-  /// consecutive rays (the rest ray by ray). With AVX-512 every run is traced as a packet
-  /// (one lane per ray in one register: the packet walk, falling back to single rays for
-  /// lanes that diverge, beat ray-by-ray tracing on primary, shadow and diffuse rays); with
-  /// SSE4.2 / AVX2 only runs whose directions share one octant are (primary rays in 4x4
-  /// blocks, shadow rays toward one light), others go ray by ray, which was faster for
-  /// diffuse rays there (perf/traversal.md). Same answers as intersect(ray) per ray.
+  /// consecutive rays (the rest ray by ray). A run whose directions share one octant is
+  /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light), others
+  /// ray by ray, which was faster for diffuse rays on every ISA (perf/traversal.md,
+  /// perf/rays.md); occlusion streams on AVX-512 trace every run as a packet (shadow rays
+  /// straddling an axis plane gained there). Same answers as intersect(ray) per ray.
   /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
   /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in
   /// pieces of whole runs (at least 1024 rays each), with the same answers. Error for
