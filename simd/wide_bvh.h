@@ -78,6 +78,16 @@ inline core::BBox slot_box(const WideNode<N>& node, int j) {
   return b;
 }
 
+/// What the kernels read of a built WideBvh: raw pointers (the owner keeps the storage).
+/// A leaf reference names a run of `Block`s (triangle blocks; instance ids for the top
+/// level of an instanced scene).
+template <class Block>
+struct WideView {
+  const WideNode<kWideN>* nodes;  ///< 64-byte aligned
+  const Block* blocks;            ///< triangle blocks: 64-byte aligned
+  std::uint32_t root;             ///< root reference (wide_ref)
+};
+
 /// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,
 /// the root reference and build statistics. Immutable after build; thread-safe to read.
 template <int N, class Block>

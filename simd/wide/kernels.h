@@ -51,6 +51,7 @@
 #include "simd/prepared_ray.h"
 #include "simd/ray_packet.h"
 #include "simd/triangle_blocks.h"
+#include "simd/wide/instance_view.h"
 #include "simd/wide_bvh.h"
 #include "volley/options.h"
 #include "volley/ray.h"
@@ -88,14 +89,6 @@ struct alignas(64) PacketSetup {
   PacketWalk walk;      //  4 bytes
 };
 }  // namespace detail
-
-/// What the kernels read of a built WideBvh: raw pointers (the owner keeps the storage).
-template <class Block>
-struct WideView {
-  const WideNode<kWideN>* nodes;  ///< 64-byte aligned
-  const Block* blocks;            ///< 64-byte aligned
-  std::uint32_t root;             ///< root reference (wide_ref)
-};
 
 /// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
 /// W = kLanes<SingleRayArch<Arch>> triangles (8 on AVX-512, whose packets still run 16
@@ -146,6 +139,12 @@ struct WideKernels {
   static void all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out);
   /// The nearest point of the triangles to `query.p` within sqrt(query.d2) (point_walk.h).
   static void closest_point(const View& bvh, core::PointQuery& query);
+  /// The top level of an instanced scene walked by the single-ray walk, every instance
+  /// whose box the ray meets handed to `visit` as `mode` says (closest: nearest box first,
+  /// bounded by the hits so far). The triangle test plays no part. Rays the oracle rejects
+  /// (non-finite origin or direction, NaN tmin or tmax) visit nothing. Returns whether some
+  /// visit returned true.
+  static bool walk_instances(const InstanceView& top, const Ray& ray, InstanceVisit visit, InstanceWalk mode);
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
@@ -177,16 +176,17 @@ struct WideKernels {
   /// and the reciprocal direction in `inv`.
   template <bool SureRange>
   [[gnu::always_inline]] inline static detail::RayScreen prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv);
-  /// trace_single, inlined into the erased entries.
-  template <class Query>
-  [[gnu::always_inline]] inline static bool trace_ray(const View& bvh, const Ray& ray, std::uint32_t start,
-                                                      Query& query);
+  /// trace_single, inlined into the erased entries (of any view: triangle blocks or the
+  /// instance ids of a top level).
+  template <class Query, class Leaves>
+  [[gnu::always_inline]] inline static bool trace_ray(const WideView<Leaves>& bvh, const Ray& ray,
+                                                      std::uint32_t start, Query& query);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   /// Inlined into its callers: the call, its frame and the vzeroupper before it cost single
   /// rays measurable time (perf/traversal.md).
-  template <class Query, bool NoZero>
-  [[gnu::always_inline]] inline static void walk(const View& bvh, const PreparedRay& ray, __m128 inv,
+  template <class Query, bool NoZero, class Leaves>
+  [[gnu::always_inline]] inline static void walk(const WideView<Leaves>& bvh, const PreparedRay& ray, __m128 inv,
                                                  std::uint32_t start, Query& query);
 
   /// Bits of the first L lanes.

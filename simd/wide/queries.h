@@ -11,7 +11,7 @@
 //   q.bound(ray)    the upper end of the search on entry.
 //   q.node()        called at every interior node the walk tests (CountingRay counts them).
 //   q.leaf(pr, blocks, count, bound)
-//                   the leaf's triangles: LeafStep::narrowed after lowering `bound`,
+//                   the leaf's triangles (a top level's: its instance ids): LeafStep::narrowed after lowering `bound`,
 //                   LeafStep::done to end the walk, LeafStep::go_on otherwise.
 //   q.answer()      what the walk returns.
 // A packet query P (the walks in frustum_walk.h and packet_walk.h), per lane:
@@ -122,6 +122,33 @@ struct AllHitsRay {
     return LeafStep::go_on;
   }
   bool answer() const { return false; }
+};
+
+/// The instances a ray's walk of a top level reaches (WideKernels::walk_instances): each
+/// leaf's instance ids to the visitor. NearFirst: closest hit (a visit's hit lowers the
+/// bound); EndAtHit: any hit (the first hit ends the walk); neither: every instance.
+template <bool NearFirst, bool EndAtHit>
+struct InstancesRay {
+  static constexpr bool kNearFirst = NearFirst;
+  static constexpr bool kSureRange = false;
+  InstanceVisit visit;
+  bool found = false;
+
+  // (Not templated on the ISA: inlined, so that no per-ISA object defines them.)
+  [[gnu::always_inline]] float bound(const Ray& ray) const { return ray.tmax; }
+  [[gnu::always_inline]] void node() {}
+  [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const std::uint32_t* instances, std::uint32_t count,
+                                       float& bound) {
+    LeafStep step = LeafStep::go_on;
+    for (std::uint32_t k = 0; k < count; ++k) {
+      if (!visit.visit(visit.context, instances[k], pr.ray, bound)) continue;
+      found = true;
+      if constexpr (EndAtHit) return LeafStep::done;
+      step = LeafStep::narrowed;
+    }
+    return step;
+  }
+  [[gnu::always_inline]] bool answer() const { return found; }
 };
 
 /// A single-ray query counted: the walk's interior nodes, leaves and their triangles go

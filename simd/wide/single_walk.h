@@ -24,8 +24,9 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Ray& r
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query>
-bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray, std::uint32_t start, Query& query) {
+template <class Query, class Leaves>
+bool WideKernels<Arch, Test, Robust>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
+                                                Query& query) {
   if (start == wide_ref::kEmptyRef) return query.answer();
   PreparedRay pr;
   __m128 inv;
@@ -38,9 +39,9 @@ bool WideKernels<Arch, Test, Robust>::trace_ray(const View& bvh, const Ray& ray,
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query, bool NoZero>
-void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& pr, __m128 inv, std::uint32_t start,
-                                           Query& query) {
+template <class Query, bool NoZero, class Leaves>
+void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const PreparedRay& pr, __m128 inv,
+                                           std::uint32_t start, Query& query) {
   using V8 = detail::Lanes8<Arch>;
   static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;
@@ -93,7 +94,7 @@ void WideKernels<Arch, Test, Robust>::walk(const View& bvh, const PreparedRay& p
   int size = 0;
   std::uint32_t ref = start;
   const WideNode<N>* const nodes = bvh.nodes;  // not reloaded after each leaf call
-  const Block* const all_blocks = bvh.blocks;
+  const Leaves* const all_blocks = bvh.blocks;
   for (;;) {
     if (!(ref & wide_ref::kLeafBit)) {
       // Interior: slab test of all eight children at once.
@@ -313,6 +314,26 @@ bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray
   const View& view = *static_cast<const View*>(bvh);
   detail::AnyHitRay<WideKernels> query;
   return trace_ray(view, ray, view.root, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+bool WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const Ray& ray, InstanceVisit visit,
+                                                     InstanceWalk mode) {
+  switch (mode) {
+    case InstanceWalk::closest: {
+      detail::InstancesRay<true, false> query{visit};
+      return trace_ray(top, ray, top.root, query);
+    }
+    case InstanceWalk::any: {
+      detail::InstancesRay<false, true> query{visit};
+      return trace_ray(top, ray, top.root, query);
+    }
+    case InstanceWalk::every: {
+      detail::InstancesRay<false, false> query{visit};
+      return trace_ray(top, ray, top.root, query);
+    }
+  }
+  return false;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>

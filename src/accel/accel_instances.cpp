@@ -13,8 +13,9 @@
 namespace volley {
 namespace {
 
-/// x' = M x + (translation if point): M as 12 floats [A | t] row by row.
-glm::vec3 apply(const float* m, const float* x, bool point) {
+/// x' = M x + (translation if point): M as 12 floats [A | t] row by row. (Inlined: it
+/// runs twice per instance a ray enters.)
+[[gnu::always_inline]] inline glm::vec3 apply(const float* m, const float* x, bool point) {
   glm::vec3 out;
   for (int r = 0; r < 3; ++r)
     out[r] = m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + (point ? m[4 * r + 3] : 0.0f);
@@ -140,7 +141,7 @@ void Accel::Impl::build_instances() {
       layer.instances.push_back(static_cast<std::uint32_t>(g.index));
       boxes.push_back(world_box(in.prototype->bound_parts, in.to_world));
     }
-    layer.instance_tree.build(boxes);
+    layer.instance_tree.build(boxes, isa, robust);
     has_instances |= !layer.instances.empty();
   }
 }
@@ -159,21 +160,21 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
   bool found = false;
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
-    core::RayT<float> r = accel::to_core(ray);
-    r.tmax = std::min(ray.tmax, hit.t);
-    auto leaf = [&](std::uint32_t k, float& tmax) {
+    Ray world = ray;
+    world.tmax = std::min(ray.tmax, hit.t);
+    auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
       Ray local = to_object(in.to_object, ray);
-      local.tmax = tmax;
+      local.tmax = bound;
       Hit h = in.prototype->intersect(local, mask);
       if (!h.hit()) return false;
-      tmax = h.t;
+      bound = h.t;
       h.inst = in.geometry;
       hit = h;
       found = true;
       return true;
     };
-    robust ? l.instance_tree.walk<false, true>(r, leaf) : l.instance_tree.walk<false, false>(r, leaf);
+    l.instance_tree.walk(simd::InstanceWalk::closest, world, leaf);
   }
   return found;
 }
@@ -181,15 +182,13 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
 bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
-    auto leaf = [&](std::uint32_t k, float& tmax) {
+    auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
       Ray local = to_object(in.to_object, ray);
-      local.tmax = tmax;
+      local.tmax = bound;
       return in.prototype->occluded(local, mask);
     };
-    const core::RayT<float> r = accel::to_core(ray);
-    if (robust ? l.instance_tree.walk<true, true>(r, leaf) : l.instance_tree.walk<true, false>(r, leaf))
-      return true;
+    if (l.instance_tree.walk(simd::InstanceWalk::any, ray, leaf)) return true;
   }
   return false;
 }
@@ -204,8 +203,7 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
       for (std::size_t i = first; i < out.size(); ++i) out[i].inst = in.geometry;
       return false;
     };
-    const core::RayT<float> r = accel::to_core(ray);
-    robust ? l.instance_tree.walk<false, true>(r, leaf) : l.instance_tree.walk<false, false>(r, leaf);
+    l.instance_tree.walk(simd::InstanceWalk::every, ray, leaf);
   }
 }
 

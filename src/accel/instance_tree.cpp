@@ -2,22 +2,47 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/bvh.h"
+#include "simd/wide_traverse.h"
 
 namespace volley::accel {
 
-void InstanceTree::build(const std::vector<core::BBox>& boxes) {
+std::size_t InstanceTree::bytes() const {
+  return nodes_.size() * sizeof(nodes_[0]) + ids_.size() * sizeof(ids_[0]) +
+         bvh_.nodes.size() * sizeof(bvh_.nodes[0]) + bvh_.prim_index.size() * sizeof(bvh_.prim_index[0]);
+}
+
+void InstanceTree::build(const std::vector<core::BBox>& boxes, Isa isa, bool robust) {
   nodes_.clear();
+  ids_.clear();
+  bvh_ = {};
+  view_ = {nullptr, nullptr, simd::wide_ref::kEmptyRef};
+  robust_ = robust;
+  walk_ = nullptr;
   if (boxes.empty()) return;
+  if (boxes.size() >= simd::wide_ref::kMaxBlocks)
+    throw std::invalid_argument("more than " + std::to_string(simd::wide_ref::kMaxBlocks - 1) +
+                                " instances in one layer");
   // Leaves of up to 8 instances where the SAH says so (priced low: the collapse spreads a
   // leaf's instances over slots of a wide node, each with a box of its own, so a leaf here
   // only decides how instances are grouped into nodes; perf/instances.md).
   core::BvhBuildOptions options;
   options.max_leaf_size = 8;
   options.intersection_cost = 0.3f;
-  const core::Bvh bvh = core::build_bvh(boxes, options);
+  core::Bvh bvh = core::build_bvh(boxes, options);
   if (bvh.nodes.empty()) return;
+  if (isa == Isa::scalar) {
+    bvh_ = std::move(bvh);  // the oracle's walk over the binary tree
+    return;
+  }
+  walk_ = simd::visit_arch(isa, [&]<class Arch>(Arch) -> WalkFn {
+    // The triangle test plays no part in the top level: the test whose ray needs no
+    // preparation.
+    if (robust) return &simd::WideKernels<Arch, TriangleTest::moller, true>::walk_instances;
+    return &simd::WideKernels<Arch, TriangleTest::moller, false>::walk_instances;
+  });
 
   // A child slot's content: a binary node (interior, or a leaf of several instances: both
   // become a wide node of their own unless opened) or one instance.
@@ -66,24 +91,26 @@ void InstanceTree::build(const std::vector<core::BBox>& boxes) {
       kids.erase(kids.begin() + best);
       open(n, kids);
     }
-    for (int k = 0; k < 8; ++k) {
-      Node& node = nodes_[p.wide];  // (re-read: emplace_back below may move the array)
+    for (int k = 0; k < simd::kWideN; ++k) {
+      simd::WideNode<simd::kWideN>& node = nodes_[p.wide];  // (re-read: emplace_back below may move the array)
       if (k >= int(kids.size())) {
-        for (int a = 0; a < 3; ++a) node.lo[a][k] = INFINITY, node.hi[a][k] = -INFINITY;
-        node.child[k] = kEmpty;
+        for (int a = 0; a < 3; ++a) node.bounds[2 * a][k] = INFINITY, node.bounds[2 * a + 1][k] = -INFINITY;
+        node.child[k] = simd::wide_ref::kEmptyRef;
         continue;
       }
       const core::BBox b = box_of(kids[k]);
-      for (int a = 0; a < 3; ++a) node.lo[a][k] = b.lo[a], node.hi[a][k] = b.hi[a];
+      for (int a = 0; a < 3; ++a) node.bounds[2 * a][k] = b.lo[a], node.bounds[2 * a + 1][k] = b.hi[a];
       if (kids[k].instance) {
-        node.child[k] = kLeaf | kids[k].index;
+        node.child[k] = simd::wide_ref::leaf(ids_.size(), 1);
+        ids_.push_back(kids[k].index);
       } else {
-        node.child[k] = static_cast<std::uint32_t>(nodes_.size());
+        node.child[k] = simd::wide_ref::interior<simd::kWideN>(nodes_.size());
         todo.push_back({kids[k].index, static_cast<std::uint32_t>(nodes_.size())});
         nodes_.emplace_back();
       }
     }
   }
+  view_ = {nodes_.data(), ids_.data(), simd::wide_ref::interior<simd::kWideN>(0)};
 }
 
 }  // namespace volley::accel
