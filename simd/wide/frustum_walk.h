@@ -34,8 +34,8 @@ namespace volley::simd {
 // whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
 // exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const View& bvh, PreparedPacket<K>& prep,
+template <class Query, class Leaves>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                              const detail::PacketSetup<K>& setup, Query& query) {
   using V8 = detail::Lanes8<Arch>;
   using B = detail::FloatB<Arch>;

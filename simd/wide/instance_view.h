@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "simd/wide_bvh.h"
+#include "volley/packet.h"
 #include "volley/ray.h"
 
 namespace volley::simd {
@@ -26,6 +27,15 @@ enum class InstanceWalk {
 /// lowering `bound` to a hit (closest) or on any hit (any).
 struct InstanceVisit {
   bool (*visit)(void* context, std::uint32_t instance, const Ray& ray, float& bound);
+  void* context;
+};
+
+/// The packet form: visit(context, instance, rays, lanes, bound) queries `instance` with
+/// the lanes `lanes` of the world packet `rays` (lane i over [tmin, bound[i])) and returns
+/// the lanes that hit, after lowering their bound (closest; any: the lanes blocked).
+struct InstancePacketVisit {
+  std::uint32_t (*visit)(void* context, std::uint32_t instance, const RayPacket<16>& rays, std::uint32_t lanes,
+                         float* bound);
   void* context;
 };
 

@@ -145,6 +145,12 @@ struct WideKernels {
   /// (non-finite origin or direction, NaN tmin or tmax) visit nothing. Returns whether some
   /// visit returned true.
   static bool walk_instances(const InstanceView& top, const Ray& ray, InstanceVisit visit, InstanceWalk mode);
+  /// The packet form (closest or any): the active lanes of `rays` walk the top level
+  /// together (the packet walks: frustum or per lane, few lanes on by the single-ray walk),
+  /// each instance handed to `visit` with the lanes that enter its box. Returns the lanes
+  /// for which some visit reported a hit.
+  static std::uint32_t walk_instances(const InstanceView& top, const RayPacket<K>& rays, InstancePacketVisit visit,
+                                      InstanceWalk mode);
 
   /// Closest hits of the active lanes of a packet (bit i of rays.active): lane i's
   /// hits.t[i] on entry bounds its search like tmax (reset() makes it +inf); only lanes
@@ -158,8 +164,8 @@ struct WideKernels {
   /// Single-ray traversal of the subtree `start` for `query` (queries.h: ClosestHitRay,
   /// AnyHitRay): returns query.answer(). The packet walks' fallback, and the entry of every
   /// single-ray query.
-  template <class Query>
-  static bool trace_single(const View& bvh, const Ray& ray, std::uint32_t start, Query& query);
+  template <class Query, class Leaves>
+  static bool trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start, Query& query);
 
   /// Leaves the packet's valid lanes active (the active lanes the oracle does not reject:
   /// finite origin and direction, tmin and tmax not NaN), makes the rejected ones inert, and
@@ -194,22 +200,22 @@ struct WideKernels {
   /// The start of every packet query: screens the packet, prepares it for the triangle
   /// test and hands it to the walk its lanes allow (frustum or per lane). Returns the lanes
   /// the query finished (0 for an empty tree or no valid lane).
-  template <class Query>
-  static std::uint32_t trace_packet_query(const View& bvh, const RayPacket<K>& rays, Query& query);
+  template <class Query, class Leaves>
+  static std::uint32_t trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays, Query& query);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
   /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
   /// zero direction component (screen() says so); taken only for packets whose lanes share
   /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
   /// hit points) the interval frustum grows loose and the per-lane walk is faster
   /// (perf/traversal.md). Returns the lanes the query finished.
-  template <class Query>
-  static std::uint32_t trace_frustum(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
-                                     Query& query);
+  template <class Query, class Leaves>
+  static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
+                                     const detail::PacketSetup<K>& setup, Query& query);
   /// The per-lane packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
   /// Uniform: every valid lane in one octant. Returns the lanes the query finished.
-  template <class Query, bool Uniform>
-  static std::uint32_t trace_packet(const View& bvh, PreparedPacket<K>& prep, const detail::PacketSetup<K>& setup,
-                                    Query& query);
+  template <class Query, bool Uniform, class Leaves>
+  static std::uint32_t trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
+                                    const detail::PacketSetup<K>& setup, Query& query);
 };
 
 }  // namespace volley::simd

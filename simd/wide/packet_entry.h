@@ -10,8 +10,8 @@
 namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const View& bvh, const RayPacket<K>& rays,
+template <class Query, class Leaves>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays,
                                                                   Query& query) {
   if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return 0;
   PreparedPacket<K> prep;
@@ -23,6 +23,19 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const View& bv
   if (setup.walk == detail::PacketWalk::frustum) return trace_frustum(bvh, prep, setup, query);
   return setup.walk == detail::PacketWalk::one_octant ? trace_packet<Query, true>(bvh, prep, setup, query)
                                                       : trace_packet<Query, false>(bvh, prep, setup, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+std::uint32_t WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const RayPacket<K>& rays,
+                                                              InstancePacketVisit visit, InstanceWalk mode) {
+  if (mode == InstanceWalk::any) {
+    detail::InstancesPacket<WideKernels, true> query{visit, rays};
+    query.hit = trace_packet_query(top, rays, query);
+    return query.hit;
+  }
+  detail::InstancesPacket<WideKernels, false> query{visit, rays};
+  trace_packet_query(top, rays, query);
+  return query.hit;
 }
 
 template <class Arch, TriangleTest Test, bool Robust>

@@ -19,8 +19,8 @@ namespace volley::simd {
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane.
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query, bool Uniform>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const View& bvh, PreparedPacket<K>& prep,
+template <class Query, bool Uniform, class Leaves>
+std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                             const detail::PacketSetup<K>& setup, Query& query) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;

@@ -151,6 +151,63 @@ struct InstancesRay {
   [[gnu::always_inline]] bool answer() const { return found; }
 };
 
+/// The instances a packet's walk of a top level reaches (WideKernels::walk_instances):
+/// each leaf's instance ids to the visitor with the lanes that enter, a lane's bound
+/// lowered by its hits (AnyHit: a lane is finished at its first hit). Lanes left to the
+/// single-ray walk visit through the same visitor, one lane at a time.
+template <class Kernels, bool AnyHit>
+struct InstancesPacket {
+  using B = typename Kernels::Float;
+  static constexpr int K = Kernels::K, L = Kernels::L;
+  InstancePacketVisit visit;
+  const RayPacket<K>& rays;   ///< the caller's packet (the visitor's lanes are read from it)
+  std::uint32_t hit = 0;      ///< lanes with a hit so far
+
+  [[gnu::always_inline]] B bound(int, B tmax) const { return tmax; }
+
+  [[gnu::always_inline]] LanesStep leaf(PreparedPacket<K>&, const std::uint32_t* instances, std::uint32_t count,
+                                        std::uint32_t lanes, B* tfar) {
+    alignas(64) float far[K];
+    for (int c = 0; c < K / L; ++c) tfar[c].store_aligned(far + c * L);
+    std::uint32_t now = 0;
+    for (std::uint32_t k = 0; k < count && lanes != 0; ++k) {
+      const std::uint32_t h = visit.visit(visit.context, instances[k], rays, lanes, far);
+      now |= h;
+      if constexpr (AnyHit) lanes &= ~h;
+    }
+    if (now == 0) return {0, false};
+    hit |= now;
+    if constexpr (AnyHit)
+      for (std::uint32_t b = now; b != 0; b &= b - 1) far[std::countr_zero(b)] = -std::numeric_limits<float>::infinity();
+    for (int c = 0; c < K / L; ++c) tfar[c] = B::load_aligned(far + c * L);
+    return {AnyHit ? now : 0u, true};
+  }
+
+  [[gnu::always_inline]] bool single(const InstanceView& top, const Ray& ray, std::uint32_t start, int i,
+                                     float& far) {
+    struct Lane {
+      InstancesPacket& packet;
+      int i;
+      float bound;  ///< the lane's bound after the last hit
+    } lane{*this, i, far};
+    auto one = [](void* context, std::uint32_t instance, const Ray&, float& bound) {
+      Lane& l = *static_cast<Lane*>(context);
+      alignas(64) float b[K];
+      b[l.i] = bound;
+      if (l.packet.visit.visit(l.packet.visit.context, instance, l.packet.rays, 1u << l.i, b) == 0) return false;
+      bound = l.bound = b[l.i];
+      return true;
+    };
+    InstancesRay<!AnyHit, AnyHit> q{{one, &lane}};
+    Ray bounded = ray;
+    bounded.tmax = far;
+    if (!Kernels::trace_single(top, bounded, start, q)) return false;
+    hit |= 1u << i;
+    far = AnyHit ? -std::numeric_limits<float>::infinity() : lane.bound;
+    return AnyHit;
+  }
+};
+
 /// A single-ray query counted: the walk's interior nodes, leaves and their triangles go
 /// to `counts`, the answers are `inner`'s.
 template <class Kernels, class Query>

@@ -17,8 +17,8 @@
 namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query>
-bool WideKernels<Arch, Test, Robust>::trace_single(const View& bvh, const Ray& ray, std::uint32_t start,
+template <class Query, class Leaves>
+bool WideKernels<Arch, Test, Robust>::trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                    Query& query) {
   return trace_ray(bvh, ray, start, query);
 }

@@ -147,9 +147,10 @@ void Accel::Impl::finish_build() {
   simple_mask = simple ? layers[0].mask : 0u;
   simple_triangles = simple ? layers[0].triangle_engine.get() : nullptr;
   simple_polygons = simple ? layers[0].polygon_engine.get() : nullptr;
-  stream_packets = !layers.empty() && !has_instances &&
+  stream_packets = !layers.empty() && (!has_instances || isa != Isa::scalar) &&
                    std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
-                     return l.triangle_engine && l.triangle_engine->traces_packets();
+                     return l.triangle_engine ? l.triangle_engine->traces_packets()
+                                              : !l.polygon_engine && !l.instances.empty();
                    });
   topology_changed = vertices_changed = refitted = false;
   built_with = {test, isa, robust, reference_double};

@@ -59,6 +59,8 @@ struct Accel::Impl {
     std::shared_ptr<const Impl> prototype;
     float to_world[12];   ///< [A | t] row by row, as given
     float to_object[12];  ///< its inverse (computed in double)
+    /// to_object by columns (lane 3 zero), for the ray transform in SSE.
+    alignas(16) float object_columns[4][4];
     std::uint32_t geometry;
   };
 
@@ -131,8 +133,9 @@ struct Accel::Impl {
   std::uint32_t simple_mask = kMaskAll;
   const accel::TriangleEngine* simple_triangles = nullptr;
   const accel::Engine* simple_polygons = nullptr;
-  /// Streams may go as packets (stream.cpp): every layer's triangle engine traces packets,
-  /// and no instances (walked lane by lane: single rays are faster, perf/instances.md).
+  /// Streams may go as packets (stream.cpp): every layer has a triangle engine that traces
+  /// packets (or only instances), and instances, if any, have packet walks (a SIMD ISA).
+  /// Every-hit streams go as packets only without instances.
   bool stream_packets = false;
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
@@ -190,6 +193,11 @@ struct Accel::Impl {
   /// overwrites `hit` (complete: inst, geom, prim) and returns true when there is one.
   bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const;
   bool occluded_instances(const Ray& ray, std::uint32_t mask) const;
+  /// The packet forms (a SIMD ISA; every lane of `rays` initialised, inactive ones inert):
+  /// the active lanes walk the top levels together. Closest: lanes with a nearer hit than
+  /// hits.t get it; occluded: returns the lanes blocked.
+  void intersect_instances(const RayPacket<16>& rays, const std::uint32_t* masks, HitPacket<16>& hits) const;
+  std::uint32_t occluded_instances(const RayPacket<16>& rays, const std::uint32_t* masks) const;
   /// Every hit through the layers' instances, appended to `out` (inst set).
   void all_hits_instances(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const;
 
@@ -234,9 +242,16 @@ struct Accel::Impl {
   bool flat(std::size_t i) const;
   /// attribute() for a scene of several geometries: a binary search of the first ids.
   void attribute_search(std::uint32_t& prim, std::uint32_t& geom) const;
-  /// The lanes of `active` (of K) whose mask shares a bit with `mask`.
-  template <int K>
-  static std::uint32_t lanes_of(std::uint32_t active, const std::uint32_t* masks, std::uint32_t mask);
+  /// The lanes of `active` whose mask shares a bit with `mask`.
+  static std::uint32_t lanes_of(std::uint32_t active, const std::uint32_t* masks, std::uint32_t mask) {
+    if (!masks) return active;
+    std::uint32_t out = 0;
+    for (std::uint32_t b = active; b != 0; b &= b - 1) {
+      const int i = __builtin_ctz(b);
+      if (masks[i] & mask) out |= 1u << i;
+    }
+    return out;
+  }
   template <int K>
   void trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
 };

@@ -2,6 +2,8 @@
 // layer holds a wide BVH over its instances' world boxes (instance_tree.h); a ray walks it after the
 // layer's own triangles and polygons, is carried into each instance's object space met on
 // the way and queried against the prototype there, bounded by the nearest hit so far.
+#include <immintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -89,6 +91,8 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   std::memcpy(instance.to_world, transform, sizeof instance.to_world);
   if (!invert(transform, instance.to_object))
     throw Error("add_instance: the transform's 3x3 part is singular (it has no inverse)");
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) instance.object_columns[c][r] = r < 3 ? instance.to_object[4 * r + c] : 0.0f;
   instance.prototype = proto;
   const std::uint32_t id = impl_->new_geometry(0, false);
   Impl::Geometry& g = impl_->geometries.back();
@@ -148,10 +152,23 @@ void Accel::Impl::build_instances() {
 
 namespace {
 
-/// The ray in an instance's object space: same t (the direction is not normalised).
-Ray to_object(const float* m, const Ray& ray) {
-  const glm::vec3 o = apply(m, ray.org, true), d = apply(m, ray.dir, false);
-  return Ray{{o.x, o.y, o.z}, ray.tmin, {d.x, d.y, d.z}, ray.tmax};
+/// The ray in an instance's object space: same t (the direction is not normalised). As
+/// apply() with to_object, bit for bit (the same sums in the same order: ((x m0 + y m1) +
+/// z m2) + m3, the direction's + 0), three rows at once.
+[[gnu::always_inline]] inline Ray to_object(const float (&columns)[4][4], const Ray& ray) {
+  const __m128 c0 = _mm_load_ps(columns[0]), c1 = _mm_load_ps(columns[1]), c2 = _mm_load_ps(columns[2]);
+  const __m128 o = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(ray.org[0])),
+                                                    _mm_mul_ps(c1, _mm_set1_ps(ray.org[1]))),
+                                         _mm_mul_ps(c2, _mm_set1_ps(ray.org[2]))),
+                              _mm_load_ps(columns[3]));
+  const __m128 d = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(ray.dir[0])),
+                                                    _mm_mul_ps(c1, _mm_set1_ps(ray.dir[1]))),
+                                         _mm_mul_ps(c2, _mm_set1_ps(ray.dir[2]))),
+                              _mm_setzero_ps());
+  alignas(16) float ov[4], dv[4];
+  _mm_store_ps(ov, o);
+  _mm_store_ps(dv, d);
+  return Ray{{ov[0], ov[1], ov[2]}, ray.tmin, {dv[0], dv[1], dv[2]}, ray.tmax};
 }
 
 }  // namespace
@@ -164,7 +181,7 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
     world.tmax = std::min(ray.tmax, hit.t);
     auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
-      Ray local = to_object(in.to_object, ray);
+      Ray local = to_object(in.object_columns, ray);
       local.tmax = bound;
       Hit h = in.prototype->intersect(local, mask);
       if (!h.hit()) return false;
@@ -184,7 +201,7 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
-      Ray local = to_object(in.to_object, ray);
+      Ray local = to_object(in.object_columns, ray);
       local.tmax = bound;
       return in.prototype->occluded(local, mask);
     };
@@ -199,12 +216,107 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
     auto leaf = [&](std::uint32_t k, float&) {
       const Instance& in = instances[l.instances[k]];
       const std::size_t first = out.size();
-      in.prototype->all_hits(to_object(in.to_object, ray), mask, out);
+      in.prototype->all_hits(to_object(in.object_columns, ray), mask, out);
       for (std::size_t i = first; i < out.size(); ++i) out[i].inst = in.geometry;
       return false;
     };
     l.instance_tree.walk(simd::InstanceWalk::every, ray, leaf);
   }
+}
+
+namespace {
+
+/// An instance met by fewer lanes than this goes lane by lane through the prototype (its
+/// packet walk would hand so few lanes to single rays anyway).
+constexpr int kFewLanes = 16;
+
+/// The lanes of `world` in an instance's object space (all 16, as to_object each), lane
+/// i's upper end bound[i].
+void to_object(const float (&m)[4][4], const RayPacket<16>& world, const float* bound, std::uint32_t lanes,
+               RayPacket<16>& out) {
+  for (int i = 0; i < 16; ++i) {
+    const Ray r = to_object(m, accel::lane_ray(world, i));
+    out.ox[i] = r.org[0], out.oy[i] = r.org[1], out.oz[i] = r.org[2];
+    out.dx[i] = r.dir[0], out.dy[i] = r.dir[1], out.dz[i] = r.dir[2];
+    out.tmin[i] = r.tmin, out.tmax[i] = bound[i];
+  }
+  out.active = lanes;
+}
+
+}  // namespace
+
+void Accel::Impl::intersect_instances(const RayPacket<16>& rays, const std::uint32_t* masks,
+                                      HitPacket<16>& hits) const {
+  for (const Layer& l : layers) {
+    const std::uint32_t lanes = lanes_of(rays.active, masks, l.mask);
+    if (lanes == 0 || l.instances.empty()) continue;
+    RayPacket<16> world = rays;
+    world.active = lanes;
+    for (std::uint32_t b = lanes; b != 0; b &= b - 1) {
+      const int i = __builtin_ctz(b);
+      world.tmax[i] = std::min(rays.tmax[i], hits.t[i]);
+    }
+    auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
+      const Instance& in = instances[l.instances[k]];
+      std::uint32_t found = 0;
+      auto keep = [&](int i, Hit h) {
+        bound[i] = h.t;
+        h.inst = in.geometry;
+        set_hit(hits, i, h);
+        found |= 1u << i;
+      };
+      if (__builtin_popcount(in_lanes) < kFewLanes) {
+        for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
+          const int i = __builtin_ctz(b);
+          Ray local = to_object(in.object_columns, accel::lane_ray(world, i));
+          local.tmax = bound[i];
+          const Hit h = in.prototype->intersect(local, masks ? masks[i] : kMaskAll);
+          if (h.hit()) keep(i, h);
+        }
+        return found;
+      }
+      RayPacket<16> local;
+      to_object(in.object_columns, world, bound, in_lanes, local);
+      HitPacket<16> h;
+      reset(h);
+      in.prototype->intersect(local, h, masks);
+      for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
+        const int i = __builtin_ctz(b);
+        const Hit x = hit_of(h, i);
+        if (x.hit()) keep(i, x);
+      }
+      return found;
+    };
+    l.instance_tree.walk_packet(simd::InstanceWalk::closest, world, leaf);
+  }
+}
+
+std::uint32_t Accel::Impl::occluded_instances(const RayPacket<16>& rays, const std::uint32_t* masks) const {
+  std::uint32_t blocked = 0;
+  for (const Layer& l : layers) {
+    const std::uint32_t lanes = lanes_of(rays.active & ~blocked, masks, l.mask);
+    if (lanes == 0 || l.instances.empty()) continue;
+    RayPacket<16> world = rays;
+    world.active = lanes;
+    auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
+      const Instance& in = instances[l.instances[k]];
+      if (__builtin_popcount(in_lanes) < kFewLanes) {
+        std::uint32_t found = 0;
+        for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
+          const int i = __builtin_ctz(b);
+          Ray local = to_object(in.object_columns, accel::lane_ray(world, i));
+          local.tmax = bound[i];
+          if (in.prototype->occluded(local, masks ? masks[i] : kMaskAll)) found |= 1u << i;
+        }
+        return found;
+      }
+      RayPacket<16> local;
+      to_object(in.object_columns, world, bound, in_lanes, local);
+      return in.prototype->occluded(local, masks) & in_lanes;
+    };
+    blocked |= l.instance_tree.walk_packet(simd::InstanceWalk::any, world, leaf);
+  }
+  return blocked;
 }
 
 }  // namespace volley

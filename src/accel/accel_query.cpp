@@ -8,25 +8,6 @@
 namespace volley {
 namespace {
 
-/// Copies the lanes `lanes` of `p` into a 16-lane packet; every other lane is inert and
-/// inactive. The kernels load and store whole chunks of lanes, so a packet with inactive
-/// lanes reaches them only as this copy: the caller's inactive lanes are never read (they
-/// may be uninitialised) nor written (they may be another thread's).
-template <int K>
-void widen(const RayPacket<K>& p, std::uint32_t lanes, RayPacket<16>& out) {
-  for (int i = 0; i < 16; ++i) {
-    if (i < K && (lanes >> i & 1u)) {
-      out.ox[i] = p.ox[i], out.oy[i] = p.oy[i], out.oz[i] = p.oz[i];
-      out.dx[i] = p.dx[i], out.dy[i] = p.dy[i], out.dz[i] = p.dz[i];
-      out.tmin[i] = p.tmin[i], out.tmax[i] = p.tmax[i];
-    } else {
-      out.ox[i] = out.oy[i] = out.oz[i] = out.dx[i] = out.dy[i] = out.dz[i] = out.tmin[i] = 0.0f;
-      out.tmax[i] = -INFINITY;
-    }
-  }
-  out.active = lanes;
-}
-
 /// Whether the engines may take the caller's packet as it is: 16 lanes, all active.
 template <int K>
 bool all_lanes_active(const RayPacket<K>& p) {
@@ -34,17 +15,6 @@ bool all_lanes_active(const RayPacket<K>& p) {
 }
 
 }  // namespace
-
-template <int K>
-std::uint32_t Accel::Impl::lanes_of(std::uint32_t active, const std::uint32_t* masks, std::uint32_t mask) {
-  if (!masks) return active;
-  std::uint32_t out = 0;
-  for (std::uint32_t b = active; b != 0; b &= b - 1) {
-    const int i = __builtin_ctz(b);
-    if (masks[i] & mask) out |= 1u << i;
-  }
-  return out;
-}
 
 Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
   Hit hit;
@@ -115,6 +85,14 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const 
     hits.inst[i] = kInvalidId;
   }
   if (!has_instances) return;
+  if constexpr (K == 16) {
+    if (isa != Isa::scalar) {  // the instances' top level walked by the packet
+      RayPacket<16> p;
+      accel::widen(rays, active, p);
+      intersect_instances(p, masks, hits);
+      return;
+    }
+  }
   // Instances lane by lane, bounded by what the lane has found.
   for (std::uint32_t b = active; b != 0; b &= b - 1) {
     const int i = __builtin_ctz(b);
@@ -144,9 +122,9 @@ void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, con
   }
   RayPacket<16> p;
   for (const Layer& l : layers) {
-    const std::uint32_t lanes = lanes_of<K>(active, masks, l.mask);
+    const std::uint32_t lanes = lanes_of(active, masks, l.mask);
     if (lanes == 0) continue;
-    widen(rays, lanes, p);
+    accel::widen(rays, lanes, p);
     if (l.triangle_engine) l.triangle_engine->intersect(p, h);
     if (l.polygon_engine) l.polygon_engine->intersect(p, h);
   }
@@ -171,10 +149,15 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
   std::uint32_t blocked = 0;
   RayPacket<16> p;
   for (const Layer& l : layers) {
-    const std::uint32_t lanes = lanes_of<K>(active, masks, l.mask) & ~blocked;
+    const std::uint32_t lanes = lanes_of(active, masks, l.mask) & ~blocked;
     if (lanes == 0) continue;
-    widen(rays, lanes, p);
+    accel::widen(rays, lanes, p);
     blocked |= trace(l, p);
+  }
+  if (has_instances && (active & ~blocked) != 0 && K == 16 && isa != Isa::scalar) {
+    RayPacket<16> p;
+    accel::widen(rays, active & ~blocked, p);
+    return blocked | occluded_instances(p, masks);
   }
   if (has_instances)
     for (std::uint32_t b = active & ~blocked; b != 0; b &= b - 1) {

@@ -101,6 +101,25 @@ Ray lane_ray(const RayPacket<K>& p, int i) {
   return Ray{{p.ox[i], p.oy[i], p.oz[i]}, p.tmin[i], {p.dx[i], p.dy[i], p.dz[i]}, p.tmax[i]};
 }
 
+/// Copies the lanes `lanes` of `p` into a 16-lane packet; every other lane is inert and
+/// inactive. The kernels load and store whole chunks of lanes, so a packet with inactive
+/// lanes reaches them only as this copy: the caller's inactive lanes are never read (they
+/// may be uninitialised) nor written (they may be another thread's).
+template <int K>
+inline void widen(const RayPacket<K>& p, std::uint32_t lanes, RayPacket<16>& out) {
+  for (int i = 0; i < 16; ++i) {
+    if (i < K && (lanes >> i & 1u)) {
+      out.ox[i] = p.ox[i], out.oy[i] = p.oy[i], out.oz[i] = p.oz[i];
+      out.dx[i] = p.dx[i], out.dy[i] = p.dy[i], out.dz[i] = p.dz[i];
+      out.tmin[i] = p.tmin[i], out.tmax[i] = p.tmax[i];
+    } else {
+      out.ox[i] = out.oy[i] = out.oz[i] = out.dx[i] = out.dy[i] = out.dz[i] = out.tmin[i] = 0.0f;
+      out.tmax[i] = -INFINITY;
+    }
+  }
+  out.active = lanes;
+}
+
 /// The oracle's ray type.
 inline core::RayT<float> to_core(const Ray& r) {
   return {{r.org[0], r.org[1], r.org[2]}, r.tmin, {r.dir[0], r.dir[1], r.dir[2]}, r.tmax};

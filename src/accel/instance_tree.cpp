@@ -21,6 +21,7 @@ void InstanceTree::build(const std::vector<core::BBox>& boxes, Isa isa, bool rob
   view_ = {nullptr, nullptr, simd::wide_ref::kEmptyRef};
   robust_ = robust;
   walk_ = nullptr;
+  walk_packet_ = nullptr;
   if (boxes.empty()) return;
   if (boxes.size() >= simd::wide_ref::kMaxBlocks)
     throw std::invalid_argument("more than " + std::to_string(simd::wide_ref::kMaxBlocks - 1) +
@@ -37,11 +38,16 @@ void InstanceTree::build(const std::vector<core::BBox>& boxes, Isa isa, bool rob
     bvh_ = std::move(bvh);  // the oracle's walk over the binary tree
     return;
   }
-  walk_ = simd::visit_arch(isa, [&]<class Arch>(Arch) -> WalkFn {
-    // The triangle test plays no part in the top level: the test whose ray needs no
-    // preparation.
-    if (robust) return &simd::WideKernels<Arch, TriangleTest::moller, true>::walk_instances;
-    return &simd::WideKernels<Arch, TriangleTest::moller, false>::walk_instances;
+  // The triangle test plays no part in the top level: the kernels of the test whose rays
+  // need the least preparation.
+  simd::visit_arch(isa, [&]<class Arch>(Arch) {
+    if (robust) {
+      using Kernels = simd::WideKernels<Arch, TriangleTest::moller, true>;
+      walk_ = &Kernels::walk_instances, walk_packet_ = &Kernels::walk_instances;
+    } else {
+      using Kernels = simd::WideKernels<Arch, TriangleTest::moller, false>;
+      walk_ = &Kernels::walk_instances, walk_packet_ = &Kernels::walk_instances;
+    }
   });
 
   // A child slot's content: a binary node (interior, or a leaf of several instances: both

@@ -33,13 +33,24 @@ class InstanceTree {
   /// whether some leaf returned true.
   template <class Leaf>
   bool walk(simd::InstanceWalk mode, const Ray& ray, Leaf& leaf) const;
+  /// Whether walk_packet is available (a SIMD ISA; the scalar one walks ray by ray).
+  bool walks_packets() const { return walk_packet_ != nullptr; }
+  /// The packet form (closest or any; walks_packets()): leaf(i, lanes, bound) for every
+  /// instance i with the lanes of `rays` that enter its box (every lane of `rays` is read:
+  /// inactive ones must be initialised), bound[lane] as in walk; returns the lanes leaf
+  /// reported hits for.
+  template <class Leaf>
+  std::uint32_t walk_packet(simd::InstanceWalk mode, const RayPacket<16>& rays, Leaf& leaf) const;
 
  private:
   using WalkFn = bool (*)(const simd::InstanceView&, const Ray&, simd::InstanceVisit, simd::InstanceWalk);
+  using PacketWalkFn = std::uint32_t (*)(const simd::InstanceView&, const RayPacket<16>&, simd::InstancePacketVisit,
+                                         simd::InstanceWalk);
   simd::AlignedVector<simd::WideNode<simd::kWideN>> nodes_;
   std::vector<std::uint32_t> ids_;  ///< instance ids in the order of the leaves
   simd::InstanceView view_{nullptr, nullptr, simd::wide_ref::kEmptyRef};
   WalkFn walk_ = nullptr;  ///< the ISA's walk; null: the scalar walk of bvh_
+  PacketWalkFn walk_packet_ = nullptr;
   core::Bvh bvh_;          ///< the binary tree (the scalar ISA's; empty otherwise)
   bool robust_ = true;
 };
@@ -63,6 +74,14 @@ bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, Leaf& leaf) con
       return robust_ ? core::traverse<false, true>(bvh_, r, one) : core::traverse<false, false>(bvh_, r, one);
   }
   return false;
+}
+
+template <class Leaf>
+std::uint32_t InstanceTree::walk_packet(simd::InstanceWalk mode, const RayPacket<16>& rays, Leaf& leaf) const {
+  auto visit = [](void* context, std::uint32_t instance, const RayPacket<16>&, std::uint32_t lanes, float* bound) {
+    return (*static_cast<Leaf*>(context))(instance, lanes, bound);
+  };
+  return walk_packet_(view_, rays, {visit, &leaf}, mode);
 }
 
 }  // namespace volley::accel

@@ -69,7 +69,7 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     std::vector<Hit>* lanes = out + first;
-    if (!as_packet(*this, rays + first, n, false)) {
+    if (has_instances || !as_packet(*this, rays + first, n, false)) {
       for (std::size_t i = 0; i < n; ++i) all_hits(rays[first + i], kMaskAll, lanes[i]);
       continue;
     }
