@@ -140,11 +140,12 @@ struct WideKernels {
   /// The nearest point of the triangles to `query.p` within sqrt(query.d2) (point_walk.h).
   static void closest_point(const View& bvh, core::PointQuery& query);
   /// The top level of an instanced scene walked by the single-ray walk, every instance
-  /// whose box the ray meets handed to `visit` as `mode` says (closest: nearest box first,
-  /// bounded by the hits so far). The triangle test plays no part. Rays the oracle rejects
+  /// whose box the ray meets over [tmin, min(tmax, bound)) handed to `visit` as `mode` says
+  /// (closest: nearest box first, bounded by the hits so far). The triangle test plays no part. Rays the oracle rejects
   /// (non-finite origin or direction, NaN tmin or tmax) visit nothing. Returns whether some
   /// visit returned true.
-  static bool walk_instances(const InstanceView& top, const Ray& ray, InstanceVisit visit, InstanceWalk mode);
+  static bool walk_instances(const InstanceView& top, const Ray& ray, float bound, InstanceVisit visit,
+                             InstanceWalk mode);
   /// The packet form (closest or any): the active lanes of `rays` walk the top level
   /// together (the packet walks: frustum or per lane, few lanes on by the single-ray walk),
   /// each instance handed to `visit` with the lanes that enter its box. Returns the lanes

@@ -132,10 +132,14 @@ struct InstancesRay {
   static constexpr bool kNearFirst = NearFirst;
   static constexpr bool kSureRange = false;
   InstanceVisit visit;
+  /// The upper end of the search besides ray.tmax (given apart: a ray copied and given a
+  /// new tmax just before the walk would stall the walk's 16-byte loads of it, as a store
+  /// of 4 bytes cannot be forwarded to them).
+  float limit;
   bool found = false;
 
   // (Not templated on the ISA: inlined, so that no per-ISA object defines them.)
-  [[gnu::always_inline]] float bound(const Ray& ray) const { return ray.tmax; }
+  [[gnu::always_inline]] float bound(const Ray& ray) const { return limit < ray.tmax ? limit : ray.tmax; }
   [[gnu::always_inline]] void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const std::uint32_t* instances, std::uint32_t count,
                                        float& bound) {
@@ -198,10 +202,8 @@ struct InstancesPacket {
       bound = l.bound = b[l.i];
       return true;
     };
-    InstancesRay<!AnyHit, AnyHit> q{{one, &lane}};
-    Ray bounded = ray;
-    bounded.tmax = far;
-    if (!Kernels::trace_single(top, bounded, start, q)) return false;
+    InstancesRay<!AnyHit, AnyHit> q{{one, &lane}, far};
+    if (!Kernels::trace_single(top, ray, start, q)) return false;
     hit |= 1u << i;
     far = AnyHit ? -std::numeric_limits<float>::infinity() : lane.bound;
     return AnyHit;

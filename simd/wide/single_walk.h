@@ -317,19 +317,19 @@ bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
-bool WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const Ray& ray, InstanceVisit visit,
-                                                     InstanceWalk mode) {
+bool WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const Ray& ray, float bound,
+                                                     InstanceVisit visit, InstanceWalk mode) {
   switch (mode) {
     case InstanceWalk::closest: {
-      detail::InstancesRay<true, false> query{visit};
+      detail::InstancesRay<true, false> query{visit, bound};
       return trace_ray(top, ray, top.root, query);
     }
     case InstanceWalk::any: {
-      detail::InstancesRay<false, true> query{visit};
+      detail::InstancesRay<false, true> query{visit, bound};
       return trace_ray(top, ray, top.root, query);
     }
     case InstanceWalk::every: {
-      detail::InstancesRay<false, false> query{visit};
+      detail::InstancesRay<false, false> query{visit, bound};
       return trace_ray(top, ray, top.root, query);
     }
   }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <string>
 
@@ -152,10 +153,12 @@ void Accel::Impl::build_instances() {
 
 namespace {
 
-/// The ray in an instance's object space: same t (the direction is not normalised). As
-/// apply() with to_object, bit for bit (the same sums in the same order: ((x m0 + y m1) +
-/// z m2) + m3, the direction's + 0), three rows at once.
-[[gnu::always_inline]] inline Ray to_object(const float (&columns)[4][4], const Ray& ray) {
+/// The ray in an instance's object space over [ray.tmin, tmax): same t (the direction is
+/// not normalised). As apply() with to_object, bit for bit (the same sums in the same order:
+/// ((x m0 + y m1) + z m2) + m3, the direction's + 0), three rows at once. Written as two
+/// 16-byte stores: the prototype's walk loads it so right away, and a load that needs
+/// several smaller stores cannot be forwarded from them (it waits for them to retire).
+[[gnu::always_inline]] inline Ray to_object(const float (&columns)[4][4], const Ray& ray, float tmax) {
   const __m128 c0 = _mm_load_ps(columns[0]), c1 = _mm_load_ps(columns[1]), c2 = _mm_load_ps(columns[2]);
   const __m128 o = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(ray.org[0])),
                                                     _mm_mul_ps(c1, _mm_set1_ps(ray.org[1]))),
@@ -165,10 +168,14 @@ namespace {
                                                     _mm_mul_ps(c1, _mm_set1_ps(ray.dir[1]))),
                                          _mm_mul_ps(c2, _mm_set1_ps(ray.dir[2]))),
                               _mm_setzero_ps());
-  alignas(16) float ov[4], dv[4];
-  _mm_store_ps(ov, o);
-  _mm_store_ps(dv, d);
-  return Ray{{ov[0], ov[1], ov[2]}, ray.tmin, {dv[0], dv[1], dv[2]}, ray.tmax};
+  // Lane 3 of each: tmin, tmax ([x y z z] then [x y z t] by two shuffles).
+  const __m128 ot = _mm_shuffle_ps(o, _mm_set1_ps(ray.tmin), _MM_SHUFFLE(0, 0, 2, 2));
+  const __m128 dt = _mm_shuffle_ps(d, _mm_set1_ps(tmax), _MM_SHUFFLE(0, 0, 2, 2));
+  static_assert(offsetof(Ray, tmin) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tmax) == 28);
+  Ray out;
+  _mm_storeu_ps(reinterpret_cast<float*>(&out), _mm_shuffle_ps(o, ot, _MM_SHUFFLE(2, 0, 1, 0)));
+  _mm_storeu_ps(reinterpret_cast<float*>(&out) + 4, _mm_shuffle_ps(d, dt, _MM_SHUFFLE(2, 0, 1, 0)));
+  return out;
 }
 
 }  // namespace
@@ -177,12 +184,9 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
   bool found = false;
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
-    Ray world = ray;
-    world.tmax = std::min(ray.tmax, hit.t);
     auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
-      Ray local = to_object(in.object_columns, ray);
-      local.tmax = bound;
+      const Ray local = to_object(in.object_columns, ray, bound);
       Hit h = in.prototype->intersect(local, mask);
       if (!h.hit()) return false;
       bound = h.t;
@@ -191,7 +195,7 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
       found = true;
       return true;
     };
-    l.instance_tree.walk(simd::InstanceWalk::closest, world, leaf);
+    l.instance_tree.walk(simd::InstanceWalk::closest, ray, hit.t, leaf);
   }
   return found;
 }
@@ -201,11 +205,10 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       const Instance& in = instances[l.instances[k]];
-      Ray local = to_object(in.object_columns, ray);
-      local.tmax = bound;
+      const Ray local = to_object(in.object_columns, ray, bound);
       return in.prototype->occluded(local, mask);
     };
-    if (l.instance_tree.walk(simd::InstanceWalk::any, ray, leaf)) return true;
+    if (l.instance_tree.walk(simd::InstanceWalk::any, ray, ray.tmax, leaf)) return true;
   }
   return false;
 }
@@ -216,11 +219,11 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
     auto leaf = [&](std::uint32_t k, float&) {
       const Instance& in = instances[l.instances[k]];
       const std::size_t first = out.size();
-      in.prototype->all_hits(to_object(in.object_columns, ray), mask, out);
+      in.prototype->all_hits(to_object(in.object_columns, ray, ray.tmax), mask, out);
       for (std::size_t i = first; i < out.size(); ++i) out[i].inst = in.geometry;
       return false;
     };
-    l.instance_tree.walk(simd::InstanceWalk::every, ray, leaf);
+    l.instance_tree.walk(simd::InstanceWalk::every, ray, ray.tmax, leaf);
   }
 }
 
@@ -235,10 +238,10 @@ constexpr int kFewLanes = 16;
 void to_object(const float (&m)[4][4], const RayPacket<16>& world, const float* bound, std::uint32_t lanes,
                RayPacket<16>& out) {
   for (int i = 0; i < 16; ++i) {
-    const Ray r = to_object(m, accel::lane_ray(world, i));
+    const Ray r = to_object(m, accel::lane_ray(world, i), bound[i]);
     out.ox[i] = r.org[0], out.oy[i] = r.org[1], out.oz[i] = r.org[2];
     out.dx[i] = r.dir[0], out.dy[i] = r.dir[1], out.dz[i] = r.dir[2];
-    out.tmin[i] = r.tmin, out.tmax[i] = bound[i];
+    out.tmin[i] = r.tmin, out.tmax[i] = r.tmax;
   }
   out.active = lanes;
 }
@@ -268,8 +271,7 @@ void Accel::Impl::intersect_instances(const RayPacket<16>& rays, const std::uint
       if (__builtin_popcount(in_lanes) < kFewLanes) {
         for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
           const int i = __builtin_ctz(b);
-          Ray local = to_object(in.object_columns, accel::lane_ray(world, i));
-          local.tmax = bound[i];
+          const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
           const Hit h = in.prototype->intersect(local, masks ? masks[i] : kMaskAll);
           if (h.hit()) keep(i, h);
         }
@@ -304,8 +306,7 @@ std::uint32_t Accel::Impl::occluded_instances(const RayPacket<16>& rays, const s
         std::uint32_t found = 0;
         for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
           const int i = __builtin_ctz(b);
-          Ray local = to_object(in.object_columns, accel::lane_ray(world, i));
-          local.tmax = bound[i];
+          const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
           if (in.prototype->occluded(local, masks ? masks[i] : kMaskAll)) found |= 1u << i;
         }
         return found;

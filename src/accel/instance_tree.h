@@ -27,12 +27,12 @@ class InstanceTree {
   std::size_t bytes() const;
 
   /// Calls leaf(i, bound) for every instance i whose box the ray meets over [tmin, bound)
-  /// as `mode` says (closest: nearest box first, leaf lowers bound on a hit and returns
+  /// (bound: at most ray.tmax, `bound` on entry) as `mode` says (closest: nearest box first, leaf lowers bound on a hit and returns
   /// true; any: stops at the first true; every: leaf returns false). A ray with a
   /// non-finite origin or direction, or a NaN tmin or tmax, visits nothing. Returns
   /// whether some leaf returned true.
   template <class Leaf>
-  bool walk(simd::InstanceWalk mode, const Ray& ray, Leaf& leaf) const;
+  bool walk(simd::InstanceWalk mode, const Ray& ray, float bound, Leaf& leaf) const;
   /// Whether walk_packet is available (a SIMD ISA; the scalar one walks ray by ray).
   bool walks_packets() const { return walk_packet_ != nullptr; }
   /// The packet form (closest or any; walks_packets()): leaf(i, lanes, bound) for every
@@ -43,7 +43,7 @@ class InstanceTree {
   std::uint32_t walk_packet(simd::InstanceWalk mode, const RayPacket<16>& rays, Leaf& leaf) const;
 
  private:
-  using WalkFn = bool (*)(const simd::InstanceView&, const Ray&, simd::InstanceVisit, simd::InstanceWalk);
+  using WalkFn = bool (*)(const simd::InstanceView&, const Ray&, float, simd::InstanceVisit, simd::InstanceWalk);
   using PacketWalkFn = std::uint32_t (*)(const simd::InstanceView&, const RayPacket<16>&, simd::InstancePacketVisit,
                                          simd::InstanceWalk);
   simd::AlignedVector<simd::WideNode<simd::kWideN>> nodes_;
@@ -56,14 +56,15 @@ class InstanceTree {
 };
 
 template <class Leaf>
-bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, Leaf& leaf) const {
+bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, float bound, Leaf& leaf) const {
   if (walk_) {
     auto visit = [](void* context, std::uint32_t instance, const Ray&, float& bound) {
       return (*static_cast<Leaf*>(context))(instance, bound);
     };
-    return walk_(view_, ray, {visit, &leaf}, mode);
+    return walk_(view_, ray, bound, {visit, &leaf}, mode);
   }
-  const core::RayT<float> r = to_core(ray);
+  core::RayT<float> r = to_core(ray);
+  r.tmax = bound < ray.tmax ? bound : ray.tmax;
   auto one = [&](std::uint32_t instance, float& bound) { return leaf(instance, bound); };
   switch (mode) {
     case simd::InstanceWalk::closest:
