@@ -59,8 +59,15 @@ struct Accel::Impl {
     std::shared_ptr<const Impl> prototype;
     float to_world[12];   ///< [A | t] row by row, as given
     float to_object[12];  ///< its inverse (computed in double)
-    /// to_object by columns (lane 3 zero), for the ray transform in SSE.
-    alignas(16) float object_columns[4][4];
+    std::uint32_t geometry;
+  };
+
+  /// What a ray that enters an instance reads of it, in one compact record per instance of
+  /// a layer (the walk's visit was three dependent loads into Instance before: a cache
+  /// miss each, perf/instances.md).
+  struct InstanceSlot {
+    alignas(16) float object_columns[4][4];  ///< to_object by columns (lane 3 zero), for the SSE transform
+    const Impl* prototype;                   ///< kept alive by the Instance
     std::uint32_t geometry;
   };
 
@@ -73,7 +80,7 @@ struct Accel::Impl {
     std::vector<std::uint32_t> polygon_ids;
     std::vector<unsigned char> excluded;  ///< per triangle: not in this layer's BVH (another layer's, disabled, degenerate)
     core::BvhStats triangle_stats;        ///< of the binary triangle BVH, as built (unit costs)
-    std::vector<std::uint32_t> instances; ///< the layer's instances (places in Impl::instances)
+    std::vector<InstanceSlot> instances;  ///< the layer's instances
     accel::InstanceTree instance_tree;    ///< over their world boxes
     double built_sah = 0.0;               ///< triangle SAH cost at the last build
     double sah_now = 0.0;                 ///< the same now (after refits)

@@ -92,8 +92,6 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   std::memcpy(instance.to_world, transform, sizeof instance.to_world);
   if (!invert(transform, instance.to_object))
     throw Error("add_instance: the transform's 3x3 part is singular (it has no inverse)");
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) instance.object_columns[c][r] = r < 3 ? instance.to_object[4 * r + c] : 0.0f;
   instance.prototype = proto;
   const std::uint32_t id = impl_->new_geometry(0, false);
   Impl::Geometry& g = impl_->geometries.back();
@@ -143,7 +141,12 @@ void Accel::Impl::build_instances() {
     for (const Geometry& g : geometries) {
       if (!g.instance || !g.enabled || g.mask != layer.mask) continue;
       const Instance& in = instances[g.index];
-      layer.instances.push_back(static_cast<std::uint32_t>(g.index));
+      InstanceSlot slot;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) slot.object_columns[c][r] = r < 3 ? in.to_object[4 * r + c] : 0.0f;
+      slot.prototype = in.prototype.get();
+      slot.geometry = in.geometry;
+      layer.instances.push_back(slot);
       boxes.push_back(world_box(in.prototype->bound_parts, in.to_world));
     }
     layer.instance_tree.build(boxes, isa, robust);
@@ -185,7 +188,7 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
-      const Instance& in = instances[l.instances[k]];
+      const InstanceSlot& in = l.instances[k];
       const Ray local = to_object(in.object_columns, ray, bound);
       Hit h = in.prototype->intersect(local, mask);
       if (!h.hit()) return false;
@@ -204,7 +207,7 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
-      const Instance& in = instances[l.instances[k]];
+      const InstanceSlot& in = l.instances[k];
       const Ray local = to_object(in.object_columns, ray, bound);
       return in.prototype->occluded(local, mask);
     };
@@ -217,7 +220,7 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float&) {
-      const Instance& in = instances[l.instances[k]];
+      const InstanceSlot& in = l.instances[k];
       const std::size_t first = out.size();
       in.prototype->all_hits(to_object(in.object_columns, ray, ray.tmax), mask, out);
       for (std::size_t i = first; i < out.size(); ++i) out[i].inst = in.geometry;
@@ -260,7 +263,7 @@ void Accel::Impl::intersect_instances(const RayPacket<16>& rays, const std::uint
       world.tmax[i] = std::min(rays.tmax[i], hits.t[i]);
     }
     auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
-      const Instance& in = instances[l.instances[k]];
+      const InstanceSlot& in = l.instances[k];
       std::uint32_t found = 0;
       auto keep = [&](int i, Hit h) {
         bound[i] = h.t;
@@ -301,7 +304,7 @@ std::uint32_t Accel::Impl::occluded_instances(const RayPacket<16>& rays, const s
     RayPacket<16> world = rays;
     world.active = lanes;
     auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
-      const Instance& in = instances[l.instances[k]];
+      const InstanceSlot& in = l.instances[k];
       if (__builtin_popcount(in_lanes) < kFewLanes) {
         std::uint32_t found = 0;
         for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
