@@ -16,9 +16,8 @@
 namespace volley {
 namespace {
 
-/// x' = M x + (translation if point): M as 12 floats [A | t] row by row. (Inlined: it
-/// runs twice per instance a ray enters.)
-[[gnu::always_inline]] inline glm::vec3 apply(const float* m, const float* x, bool point) {
+/// x' = M x + (translation if point): M as 12 floats [A | t] row by row.
+glm::vec3 apply(const float* m, const float* x, bool point) {
   glm::vec3 out;
   for (int r = 0; r < 3; ++r)
     out[r] = m[4 * r] * x[0] + m[4 * r + 1] * x[1] + m[4 * r + 2] * x[2] + (point ? m[4 * r + 3] : 0.0f);
@@ -232,8 +231,9 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
 
 namespace {
 
-/// An instance met by fewer lanes than this goes lane by lane through the prototype (its
-/// packet walk would hand so few lanes to single rays anyway).
+/// An instance met by fewer lanes than this goes lane by lane through the prototype: the
+/// prototype's packet walk hands most of a partial packet's lanes to single rays anyway
+/// (packets from 4 or 8 lanes on were slower than from 16: perf/instances.md).
 constexpr int kFewLanes = 16;
 
 /// The lanes of `world` in an instance's object space (all 16, as to_object each), lane
