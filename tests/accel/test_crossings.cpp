@@ -142,7 +142,7 @@ TEST_CASE("crossings: rays from inside closed meshes aimed at vertices, edges an
   }
 }
 
-TEST_CASE("crossings: axis-aligned rays through the vertices and edges of a box mesh cross once; from outside twice or never") {
+TEST_CASE("crossings: axis-aligned rays through the vertices and edges of a box mesh cross once, from outside twice or never") {
   const ClosedMesh c = volley::accuracy::grid_cube(4);
   for (Isa isa : every_isa()) {
     const Accel a = mesh_accel(c.mesh, isa);
@@ -235,7 +235,7 @@ TEST_CASE("crossings: contains agrees with a double-precision reference away fro
   }
 }
 
-TEST_CASE("crossings: batches on 0, 1 and 3 threads give the single-ray answers; lists are in ray order") {
+TEST_CASE("crossings: batches on 0, 1 and 3 threads give the single-ray answers, lists are in ray order") {
   const accel_test::Soup soup = accel_test::random_soup(400, 21);
   const Accel a = soup.accel(TriangleTest::watertight, Isa::automatic);
   std::mt19937 rng(2);
@@ -264,7 +264,7 @@ TEST_CASE("crossings: batches on 0, 1 and 3 threads give the single-ray answers;
   CHECK_THROWS_AS(a.count_intersections(rays.data(), 1, &one, -1), volley::Error);
 }
 
-TEST_CASE("crossings: a short buffer gets the nearest hits and the full count; polygons, geometries and instances are attributed") {
+TEST_CASE("crossings: a short buffer gets the nearest hits and the full count, polygons, geometries and instances are attributed") {
   // Two parallel quads as triangles (geometry 0), a square polygon between them (geometry 1).
   const float quads[] = {0, 0, 0, 4, 0, 0, 4, 4, 0, 0, 4, 0, 0, 0, 2, 4, 0, 2, 4, 4, 2, 0, 4, 2};
   const std::uint32_t idx[] = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};

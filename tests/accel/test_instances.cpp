@@ -73,7 +73,7 @@ std::vector<Ray> aimed_rays(const accel_test::Soup& soup, std::uint32_t seed) {
 
 }  // namespace
 
-TEST_CASE("instances: answers of the flattened scene; every query form; every ISA and test") {
+TEST_CASE("instances: answers of the flattened scene, every query form, every ISA and test") {
   const accel_test::Soup soup = accel_test::random_soup(200, 77), other = accel_test::random_soup(100, 78);
   for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
     if (!volley::simd::cpu_has(isa)) continue;
@@ -121,6 +121,72 @@ TEST_CASE("instances: answers of the flattened scene; every query form; every IS
       CHECK(differ <= int(rays.size()) / 200);  // near-ties between triangles may go either way
       report(check_forms(scene, rays, single, 11), "instanced scene: forms against single rays");
     }
+  }
+}
+
+TEST_CASE("instances: masked packets and streams answer as masked single rays, every ISA") {
+  // The packet walk of the top level takes each lane's mask to the layers and the
+  // prototypes (partial packets, an instance entered by all 16 lanes or by a few).
+  const accel_test::Soup soup = accel_test::random_soup(200, 91), own = accel_test::random_soup(60, 92);
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel prototype;
+    add_soup(prototype, soup);
+    prototype.commit({TriangleTest::watertight, isa});
+    Accel scene;
+    scene.set_geometry_mask(add_soup(scene, own), 0x1);
+    std::uint32_t k = 0;
+    for (const std::vector<float>& m : placements())
+      scene.set_geometry_mask(scene.add_instance(prototype, m.data()), (k++ % 2) ? 0x2 : 0x4);
+    scene.commit({TriangleTest::watertight, isa});
+    const std::vector<Ray> rays = aimed_rays(soup, 9);
+    std::mt19937 rng(17);
+    std::vector<std::uint32_t> masks(rays.size());
+    for (std::uint32_t& m : masks) m = rng() % 8;  // 0 sees nothing, 7 everything
+    std::vector<Hit> want(rays.size());
+    std::vector<std::uint8_t> blocked_want(rays.size());
+    int through = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      want[i] = scene.intersect(rays[i], masks[i]);
+      blocked_want[i] = scene.occluded(rays[i], masks[i]) ? 1 : 0;
+      CHECK(blocked_want[i] == (want[i].hit() ? 1 : 0));
+      through += want[i].inst != kInvalidId;
+    }
+    CHECK(through > int(rays.size()) / 4);
+    int packet = 0, packet_occluded = 0, inactive = 0;
+    for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+      volley::RayPacket<16> p;
+      volley::load(p, rays.data() + first, 16);
+      if ((first / 16) % 3 == 1) p.active = static_cast<std::uint32_t>(rng()) & 0xffffu;  // partial packets
+      volley::HitPacket<16> h;
+      volley::reset(h);
+      scene.intersect(p, h, masks.data() + first);
+      const std::uint32_t blocked = scene.occluded(p, masks.data() + first);
+      for (int i = 0; i < 16; ++i) {
+        if (!((p.active >> i) & 1u)) {
+          inactive += h.t[i] != INFINITY || ((blocked >> i) & 1u);
+          continue;
+        }
+        const Hit got = volley::hit_of(h, i), w = want[first + i];
+        packet += !(got.hit() == w.hit() && (!w.hit() || (got.prim == w.prim && got.geom == w.geom &&
+                                                          got.inst == w.inst && got.t == w.t)));
+        packet_occluded += ((blocked >> i) & 1u) != blocked_want[first + i];
+      }
+    }
+    CHECK(packet == 0);
+    CHECK(packet_occluded == 0);
+    CHECK(inactive == 0);
+    std::vector<Hit> hits(rays.size());
+    std::vector<std::uint8_t> blocked(rays.size());
+    scene.intersect(rays.data(), masks.data(), rays.size(), hits.data());
+    scene.occluded(rays.data(), masks.data(), rays.size(), blocked.data());
+    int stream = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i)
+      stream += !(hits[i].hit() == want[i].hit() && hits[i].prim == want[i].prim && hits[i].inst == want[i].inst &&
+                  hits[i].t == want[i].t) ||
+                blocked[i] != blocked_want[i];
+    CHECK(stream == 0);
   }
 }
 

@@ -125,7 +125,7 @@ TEST_CASE("masks: a ray sees the geometries its mask shares a bit with, every IS
   }
 }
 
-TEST_CASE("masks: a scene without masks has one layer; masked scenes refit, save and load") {
+TEST_CASE("masks: a scene without masks has one layer, masked scenes refit, save and load") {
   const MaskedScene scene;
   const Isa isa = volley::simd::cpu_has(Isa::avx2) ? Isa::avx2 : Isa::sse42;
   const std::vector<Ray> rays = accel_test::mixed_rays(20, 12.0f, 8);

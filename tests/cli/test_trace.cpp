@@ -222,7 +222,7 @@ TEST_CASE("trace: every mode and thread count gives the same answers, and the li
   }
 }
 
-TEST_CASE("trace --stats: the walk's visits per ray; refused where the walk cannot count") {
+TEST_CASE("trace --stats: the walk's visits per ray, refused where the walk cannot count") {
   const fs::path primary = temp_path("stats_primary.vray");
   REQUIRE(run("rays " + kCornell + " --workload primary --width 20 --height 20 -o " + primary.string()).status == 0);
   for (const char* query : {"", " --occluded"}) {
@@ -286,7 +286,7 @@ TEST_CASE("trace and rays: bad input gives a clear message and a non-zero exit")
   CHECK(has(r.output, "no light"));
 }
 
-TEST_CASE("trace --save / --load: the loaded structure gives the same hit file; a wrong file is named") {
+TEST_CASE("trace --save / --load: the loaded structure gives the same hit file, a wrong file is named") {
   const fs::path rays = temp_path("saveload.vray"), saved = temp_path("cornell.vacc");
   const fs::path built_hits = temp_path("built.vhit"), loaded_hits = temp_path("loaded.vhit");
   REQUIRE(run("rays " + kCornell + " --workload primary --width 40 --height 30 -o " + rays.string()).status == 0);
@@ -356,7 +356,7 @@ TEST_CASE("trace --mask: rays see the objects whose \"mask\" shares a bit with t
   CHECK(has(r.output, "mask"));
 }
 
-TEST_CASE("instance objects: the same hits as the object placed by hand; bad \"of\" names the problem") {
+TEST_CASE("instance objects: the same hits as the object placed by hand, bad \"of\" names the problem") {
   // A square of two triangles, hidden itself (mask 0), placed twice; and the same two
   // placements written out as plain objects.
   const std::string square = R"("vertices": [[-1,-1,0],[1,-1,0],[1,1,0],[-1,1,0]], "indices": [[0,1,2],[0,2,3]])";
