@@ -26,6 +26,8 @@
 //   is no referee here: its binary BVH and the wide BVH cull different boxes, and where the
 //   float test reports a hit the exact ray does not have (rays from 1e27 away, subnormal
 //   directions), one of them may visit that leaf and the other not.
+// - Instances: the scene placed under the identity in a scene of its own answers in every
+//   form alike, and as the scene itself where the ray reaches it unchanged (check_instance).
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <algorithm>
@@ -435,6 +437,33 @@ std::vector<volley_hit> trace_all_forms(const volley_scene* scene, const std::ve
   return single;
 }
 
+/// The scene placed once, under the identity, in a scene of its own: the instance's top
+/// level and the ray's way into it (single rays, packets of any lanes, streams) answer in
+/// every form alike (trace_all_forms), and a finite ray without a zero component (which
+/// reaches the prototype bit for bit: the transform's sums only turn -0 into +0) gets the
+/// prototype's own answer `got`, through the instance.
+void check_instance(const volley_scene* prototype, const volley_commit_options& options,
+                    const std::vector<volley_ray>& rays, const std::vector<volley_hit>& got, FuzzedDataProvider& in) {
+  volley_scene* world = nullptr;
+  if (volley_scene_create(&world) != VOLLEY_OK) finding("scene_create failed", 0);
+  const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  std::uint32_t id = VOLLEY_INVALID_ID;
+  if (volley_scene_add_instance(world, prototype, identity, &id) != VOLLEY_OK ||
+      volley_scene_commit_ex(world, &options) != VOLLEY_OK)
+    finding("an identity instance of a committed scene failed", 0);
+  const std::vector<volley_hit> single = trace_all_forms(world, rays, in);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const volley_ray& r = rays[i];
+    bool plain = comparable(r);
+    for (int k = 0; k < 3; ++k) plain = plain && std::isfinite(r.org[k]) && r.dir[k] != 0.0f && std::isfinite(r.dir[k]);
+    if (!plain) continue;
+    volley_hit want = got[i];
+    if (want.prim != VOLLEY_INVALID_PRIM) want.inst = id;
+    if (!same_bits(single[i], want)) finding("an identity instance answers otherwise than its prototype", i);
+  }
+  volley_scene_destroy(world);
+}
+
 /// Every geometry given one fuzzed mask and the scene committed again: a ray with a mask
 /// that shares a bit with it gets the unmasked answer `got`, one that shares none a miss,
 /// in the single, stream and packet forms.
@@ -509,6 +538,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
     check_against_oracle(rays, got, geometry, first_triangle, first_triangle != VOLLEY_INVALID_PRIM, options.test,
                          info.isa, options.reference_double != 0);
+    check_instance(scene, options, rays, got, in);
     check_masks(scene, options, info.geometries, rays, got, in);
   }
   volley_scene_destroy(scene);
