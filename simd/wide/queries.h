@@ -11,8 +11,9 @@
 //   q.bound(ray)    the upper end of the search on entry.
 //   q.node()        called at every interior node the walk tests (CountingRay counts them).
 //   q.leaf(pr, blocks, count, bound)
-//                   the leaf's triangles (a top level's: its instance ids): LeafStep::narrowed after lowering `bound`,
-//                   LeafStep::done to end the walk, LeafStep::go_on otherwise.
+//                   the leaf's triangles (a top level's: its instance ids):
+//                   LeafStep::narrowed after lowering `bound`, LeafStep::done to end the
+//                   walk, LeafStep::go_on otherwise.
 //   q.answer()      what the walk returns.
 // A packet query P (the walks in frustum_walk.h and packet_walk.h), per lane:
 //   p.bound(o, tmax)                 the upper ends of lanes o .. o + L - 1 on entry.
@@ -182,7 +183,8 @@ struct InstancesPacket {
     if (now == 0) return {0, false};
     hit |= now;
     if constexpr (AnyHit)
-      for (std::uint32_t b = now; b != 0; b &= b - 1) far[std::countr_zero(b)] = -std::numeric_limits<float>::infinity();
+      for (std::uint32_t b = now; b != 0; b &= b - 1)
+        far[std::countr_zero(b)] = -std::numeric_limits<float>::infinity();
     for (int c = 0; c < K / L; ++c) tfar[c] = B::load_aligned(far + c * L);
     return {AnyHit ? now : 0u, true};
   }

@@ -27,10 +27,10 @@ class InstanceTree {
   std::size_t bytes() const;
 
   /// Calls leaf(i, bound) for every instance i whose box the ray meets over [tmin, bound)
-  /// (bound: at most ray.tmax, `bound` on entry) as `mode` says (closest: nearest box first, leaf lowers bound on a hit and returns
-  /// true; any: stops at the first true; every: leaf returns false). A ray with a
-  /// non-finite origin or direction, or a NaN tmin or tmax, visits nothing. Returns
-  /// whether some leaf returned true.
+  /// (bound: at most ray.tmax, `bound` on entry) as `mode` says (closest: nearest box
+  /// first, leaf lowers bound on a hit and returns true; any: stops at the first true;
+  /// every: leaf returns false). A ray with a non-finite origin or direction, or a NaN
+  /// tmin or tmax, visits nothing. Returns whether some leaf returned true.
   template <class Leaf>
   bool walk(simd::InstanceWalk mode, const Ray& ray, float bound, Leaf& leaf) const;
   /// Whether walk_packet is available (a SIMD ISA; the scalar one walks ray by ray).
