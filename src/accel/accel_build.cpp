@@ -47,13 +47,13 @@ bool Accel::Impl::flat(std::size_t i) const {
 }
 
 void Accel::Impl::attribute_search(std::uint32_t& prim, std::uint32_t& geom) const {
-  // The last geometry whose first id is <= prim (empty geometries share their first id with
-  // the next one; the search passes them).
-  const auto it = std::upper_bound(geometries.begin(), geometries.end(), prim,
-                                   [](std::uint32_t id, const Geometry& g) { return id < g.first; });
-  const auto g = it - 1;
-  geom = static_cast<std::uint32_t>(g - geometries.begin());
-  prim -= g->first;
+  // The last geometry with primitives whose first id is <= prim.
+  const auto it = std::upper_bound(id_starts.begin(), id_starts.end(), prim,
+                                   [](std::uint32_t id, const std::pair<std::uint32_t, std::uint32_t>& s) {
+                                     return id < s.first;
+                                   });
+  geom = (it - 1)->second;
+  prim -= (it - 1)->first;
 }
 
 std::vector<std::uint32_t> Accel::Impl::layer_masks() const {
@@ -143,6 +143,10 @@ void Accel::Impl::finish_build() {
                   ? layers[0].triangle_engine->wide()
                   : nullptr;
   one_geometry = geometries.size() == 1 && !geometries[0].instance;
+  id_starts.clear();
+  for (std::size_t g = 0; g < geometries.size(); ++g)
+    if (!geometries[g].instance && geometries[g].count != 0)
+      id_starts.emplace_back(geometries[g].first, static_cast<std::uint32_t>(g));
   simple = layers.size() == 1 && !has_instances;
   simple_mask = simple ? layers[0].mask : 0u;
   simple_triangles = simple ? layers[0].triangle_engine.get() : nullptr;

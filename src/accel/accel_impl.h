@@ -105,6 +105,10 @@ struct Accel::Impl {
   std::size_t degenerate = 0;
   std::size_t disabled = 0;       ///< geometries left out at the commit
   bool one_geometry = false;      ///< the committed scene has one geometry (hits need no search)
+  /// {first id, geometry} of the geometries that hold primitives, by first id: what
+  /// attribute_search searches (instances and empty geometries left out: a field of
+  /// instances over one mesh searches one entry, not thousands).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> id_starts;
   // What decides between a refit and a build at the next commit (Options::refit).
   bool topology_changed = true;   ///< a geometry added, enabled, disabled or masked since the last build
   bool vertices_changed = false;  ///< update_vertices since the last commit
