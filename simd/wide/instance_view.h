@@ -22,20 +22,19 @@ enum class InstanceWalk {
 };
 
 /// The action at each instance the top level's walk reaches, type-erased (one call per
-/// instance: the instance's own walk costs far more): visit(context, instance, ray, bound)
-/// queries `instance` with the world `ray` over [ray.tmin, bound) and returns true after
-/// lowering `bound` to a hit (closest) or on any hit (any).
+/// instance: the instance's own walk costs far more): visit(context, instance, bound)
+/// queries `instance` with the walk's ray (the visitor holds it) over [tmin, bound) and
+/// returns true after lowering `bound` to a hit (closest) or on any hit (any).
 struct InstanceVisit {
-  bool (*visit)(void* context, std::uint32_t instance, const Ray& ray, float& bound);
+  bool (*visit)(void* context, std::uint32_t instance, float& bound);
   void* context;
 };
 
-/// The packet form: visit(context, instance, rays, lanes, bound) queries `instance` with
-/// the lanes `lanes` of the world packet `rays` (lane i over [tmin, bound[i])) and returns
-/// the lanes that hit, after lowering their bound (closest; any: the lanes blocked).
+/// The packet form: visit(context, instance, lanes, bound) queries `instance` with the
+/// lanes `lanes` of the walk's packet (lane i over [tmin, bound[i])) and returns the lanes
+/// that hit, after lowering their bound (closest; any: the lanes blocked).
 struct InstancePacketVisit {
-  std::uint32_t (*visit)(void* context, std::uint32_t instance, const RayPacket<16>& rays, std::uint32_t lanes,
-                         float* bound);
+  std::uint32_t (*visit)(void* context, std::uint32_t instance, std::uint32_t lanes, float* bound);
   void* context;
 };
 

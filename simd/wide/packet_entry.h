@@ -29,11 +29,11 @@ template <class Arch, TriangleTest Test, bool Robust>
 std::uint32_t WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const RayPacket<K>& rays,
                                                               InstancePacketVisit visit, InstanceWalk mode) {
   if (mode == InstanceWalk::any) {
-    detail::InstancesPacket<WideKernels, true> query{visit, rays};
+    detail::InstancesPacket<WideKernels, true> query{visit};
     query.hit = trace_packet_query(top, rays, query);
     return query.hit;
   }
-  detail::InstancesPacket<WideKernels, false> query{visit, rays};
+  detail::InstancesPacket<WideKernels, false> query{visit};
   trace_packet_query(top, rays, query);
   return query.hit;
 }

@@ -142,11 +142,11 @@ struct InstancesRay {
   // (Not templated on the ISA: inlined, so that no per-ISA object defines them.)
   [[gnu::always_inline]] float bound(const Ray& ray) const { return limit < ray.tmax ? limit : ray.tmax; }
   [[gnu::always_inline]] void node() {}
-  [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const std::uint32_t* instances, std::uint32_t count,
+  [[gnu::always_inline]] LeafStep leaf(const PreparedRay&, const std::uint32_t* instances, std::uint32_t count,
                                        float& bound) {
     LeafStep step = LeafStep::go_on;
     for (std::uint32_t k = 0; k < count; ++k) {
-      if (!visit.visit(visit.context, instances[k], pr.ray, bound)) continue;
+      if (!visit.visit(visit.context, instances[k], bound)) continue;
       found = true;
       if constexpr (EndAtHit) return LeafStep::done;
       step = LeafStep::narrowed;
@@ -165,8 +165,7 @@ struct InstancesPacket {
   using B = typename Kernels::Float;
   static constexpr int K = Kernels::K, L = Kernels::L;
   InstancePacketVisit visit;
-  const RayPacket<K>& rays;   ///< the caller's packet (the visitor's lanes are read from it)
-  std::uint32_t hit = 0;      ///< lanes with a hit so far
+  std::uint32_t hit = 0;  ///< lanes with a hit so far
 
   [[gnu::always_inline]] B bound(int, B tmax) const { return tmax; }
 
@@ -176,7 +175,7 @@ struct InstancesPacket {
     for (int c = 0; c < K / L; ++c) tfar[c].store_aligned(far + c * L);
     std::uint32_t now = 0;
     for (std::uint32_t k = 0; k < count && lanes != 0; ++k) {
-      const std::uint32_t h = visit.visit(visit.context, instances[k], rays, lanes, far);
+      const std::uint32_t h = visit.visit(visit.context, instances[k], lanes, far);
       now |= h;
       if constexpr (AnyHit) lanes &= ~h;
     }
@@ -196,11 +195,11 @@ struct InstancesPacket {
       int i;
       float bound;  ///< the lane's bound after the last hit
     } lane{*this, i, far};
-    auto one = [](void* context, std::uint32_t instance, const Ray&, float& bound) {
+    auto one = [](void* context, std::uint32_t instance, float& bound) {
       Lane& l = *static_cast<Lane*>(context);
       alignas(64) float b[K];
       b[l.i] = bound;
-      if (l.packet.visit.visit(l.packet.visit.context, instance, l.packet.rays, 1u << l.i, b) == 0) return false;
+      if (l.packet.visit.visit(l.packet.visit.context, instance, 1u << l.i, b) == 0) return false;
       bound = l.bound = b[l.i];
       return true;
     };

@@ -204,11 +204,12 @@ struct Accel::Impl {
   /// overwrites `hit` (complete: inst, geom, prim) and returns true when there is one.
   bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const;
   bool occluded_instances(const Ray& ray, std::uint32_t mask) const;
-  /// The packet forms (a SIMD ISA; every lane of `rays` initialised, inactive ones inert):
-  /// the active lanes walk the top levels together. Closest: lanes with a nearer hit than
-  /// hits.t get it; occluded: returns the lanes blocked.
-  void intersect_instances(const RayPacket<16>& rays, const std::uint32_t* masks, HitPacket<16>& hits) const;
-  std::uint32_t occluded_instances(const RayPacket<16>& rays, const std::uint32_t* masks) const;
+  /// The packet forms (a SIMD ISA; `rays` a widened copy, every lane initialised, inactive
+  /// ones inert; its active lanes and tmax are rewritten): the active lanes walk the top
+  /// levels together. Closest: lanes with a nearer hit than hits.t get it; occluded:
+  /// returns the lanes blocked.
+  void intersect_instances(RayPacket<16>& rays, const std::uint32_t* masks, HitPacket<16>& hits) const;
+  std::uint32_t occluded_instances(RayPacket<16>& rays, const std::uint32_t* masks) const;
   /// Every hit through the layers' instances, appended to `out` (inst set).
   void all_hits_instances(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const;
 

@@ -251,16 +251,16 @@ void to_object(const float (&m)[4][4], const RayPacket<16>& world, const float* 
 
 }  // namespace
 
-void Accel::Impl::intersect_instances(const RayPacket<16>& rays, const std::uint32_t* masks,
-                                      HitPacket<16>& hits) const {
+void Accel::Impl::intersect_instances(RayPacket<16>& world, const std::uint32_t* masks, HitPacket<16>& hits) const {
+  const std::uint32_t active = world.active;
   for (const Layer& l : layers) {
-    const std::uint32_t lanes = lanes_of(rays.active, masks, l.mask);
+    const std::uint32_t lanes = lanes_of(active, masks, l.mask);
     if (lanes == 0 || l.instances.empty()) continue;
-    RayPacket<16> world = rays;
     world.active = lanes;
+    // Each lane bounded by its hit so far (an earlier layer's included: hits.t only falls).
     for (std::uint32_t b = lanes; b != 0; b &= b - 1) {
       const int i = __builtin_ctz(b);
-      world.tmax[i] = std::min(rays.tmax[i], hits.t[i]);
+      world.tmax[i] = std::min(world.tmax[i], hits.t[i]);
     }
     auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
       const InstanceSlot& in = l.instances[k];
@@ -296,12 +296,12 @@ void Accel::Impl::intersect_instances(const RayPacket<16>& rays, const std::uint
   }
 }
 
-std::uint32_t Accel::Impl::occluded_instances(const RayPacket<16>& rays, const std::uint32_t* masks) const {
+std::uint32_t Accel::Impl::occluded_instances(RayPacket<16>& world, const std::uint32_t* masks) const {
+  const std::uint32_t active = world.active;
   std::uint32_t blocked = 0;
   for (const Layer& l : layers) {
-    const std::uint32_t lanes = lanes_of(rays.active & ~blocked, masks, l.mask);
+    const std::uint32_t lanes = lanes_of(active & ~blocked, masks, l.mask);
     if (lanes == 0 || l.instances.empty()) continue;
-    RayPacket<16> world = rays;
     world.active = lanes;
     auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
       const InstanceSlot& in = l.instances[k];

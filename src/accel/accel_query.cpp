@@ -154,16 +154,18 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
     accel::widen(rays, lanes, p);
     blocked |= trace(l, p);
   }
-  if (has_instances && (active & ~blocked) != 0 && K == 16 && isa != Isa::scalar) {
-    RayPacket<16> p;
-    accel::widen(rays, active & ~blocked, p);
-    return blocked | occluded_instances(p, masks);
-  }
-  if (has_instances)
-    for (std::uint32_t b = active & ~blocked; b != 0; b &= b - 1) {
-      const int i = __builtin_ctz(b);
-      if (occluded_instances(accel::lane_ray(rays, i), masks ? masks[i] : kMaskAll)) blocked |= 1u << i;
+  if (!has_instances || (active & ~blocked) == 0) return blocked;
+  if constexpr (K == 16) {
+    if (isa != Isa::scalar) {  // the instances' top level walked by the packet
+      accel::widen(rays, active & ~blocked, p);
+      return blocked | occluded_instances(p, masks);
     }
+  }
+  // Lane by lane (the scalar ISA, or a packet of 4 or 8).
+  for (std::uint32_t b = active & ~blocked; b != 0; b &= b - 1) {
+    const int i = __builtin_ctz(b);
+    if (occluded_instances(accel::lane_ray(rays, i), masks ? masks[i] : kMaskAll)) blocked |= 1u << i;
+  }
   return blocked;
 }
 

@@ -58,7 +58,7 @@ class InstanceTree {
 template <class Leaf>
 bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, float bound, Leaf& leaf) const {
   if (walk_) {
-    auto visit = [](void* context, std::uint32_t instance, const Ray&, float& bound) {
+    auto visit = [](void* context, std::uint32_t instance, float& bound) {
       return (*static_cast<Leaf*>(context))(instance, bound);
     };
     return walk_(view_, ray, bound, {visit, &leaf}, mode);
@@ -79,7 +79,7 @@ bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, float bound, Le
 
 template <class Leaf>
 std::uint32_t InstanceTree::walk_packet(simd::InstanceWalk mode, const RayPacket<16>& rays, Leaf& leaf) const {
-  auto visit = [](void* context, std::uint32_t instance, const RayPacket<16>&, std::uint32_t lanes, float* bound) {
+  auto visit = [](void* context, std::uint32_t instance, std::uint32_t lanes, float* bound) {
     return (*static_cast<Leaf*>(context))(instance, lanes, bound);
   };
   return walk_packet_(view_, rays, {visit, &leaf}, mode);
