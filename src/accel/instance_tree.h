@@ -33,12 +33,10 @@ class InstanceTree {
   /// tmin or tmax, visits nothing. Returns whether some leaf returned true.
   template <class Leaf>
   bool walk(simd::InstanceWalk mode, const Ray& ray, float bound, Leaf& leaf) const;
-  /// Whether walk_packet is available (a SIMD ISA; the scalar one walks ray by ray).
-  bool walks_packets() const { return walk_packet_ != nullptr; }
-  /// The packet form (closest or any; walks_packets()): leaf(i, lanes, bound) for every
-  /// instance i with the lanes of `rays` that enter its box (every lane of `rays` is read:
-  /// inactive ones must be initialised), bound[lane] as in walk; returns the lanes leaf
-  /// reported hits for.
+  /// The packet form (closest or any; built for a SIMD ISA only: the scalar one walks ray
+  /// by ray): leaf(i, lanes, bound) for every instance i with the lanes of `rays` that
+  /// enter its box (every lane of `rays` is read: inactive ones must be initialised),
+  /// bound[lane] as in walk; returns the lanes leaf reported hits for.
   template <class Leaf>
   std::uint32_t walk_packet(simd::InstanceWalk mode, const RayPacket<16>& rays, Leaf& leaf) const;
 
@@ -66,15 +64,10 @@ bool InstanceTree::walk(simd::InstanceWalk mode, const Ray& ray, float bound, Le
   core::RayT<float> r = to_core(ray);
   r.tmax = bound < ray.tmax ? bound : ray.tmax;
   auto one = [&](std::uint32_t instance, float& bound) { return leaf(instance, bound); };
-  switch (mode) {
-    case simd::InstanceWalk::closest:
-      return robust_ ? core::traverse<false, true>(bvh_, r, one) : core::traverse<false, false>(bvh_, r, one);
-    case simd::InstanceWalk::any:
-      return robust_ ? core::traverse<true, true>(bvh_, r, one) : core::traverse<true, false>(bvh_, r, one);
-    case simd::InstanceWalk::every:
-      return robust_ ? core::traverse<false, true>(bvh_, r, one) : core::traverse<false, false>(bvh_, r, one);
-  }
-  return false;
+  // (every: the closest walk, whose leaf never lowers the bound, visits every box met)
+  if (mode == simd::InstanceWalk::any)
+    return robust_ ? core::traverse<true, true>(bvh_, r, one) : core::traverse<true, false>(bvh_, r, one);
+  return robust_ ? core::traverse<false, true>(bvh_, r, one) : core::traverse<false, false>(bvh_, r, one);
 }
 
 template <class Leaf>
