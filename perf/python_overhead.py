@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""The Python package's overhead against the C++ API on the same rays and points, one
-thread: cast_rays against `volley trace --mode stream` (Accel::intersect on a ray array)
-and compute_distance against `volley query --op distance` (Accel::distances), best of
---reps each, alternating. Prints a markdown table with the CPU model.
+"""The Python package's overhead against the C++ API on the same rays and points:
+cast_rays against `volley trace --mode stream` (Accel::intersect on a ray array; with
+--threads above 1, `--mode batch`, the same call on a thread count) and compute_distance
+against `volley query --op distance` (Accel::distances), best of --reps each,
+alternating, at each thread count of --threads (one by default; "1,2,4,8,16" gives the
+scaling of both sides). Prints a markdown table with the CPU model.
 
   PYTHONPATH=build/release/python /usr/bin/python3 perf/python_overhead.py ../shared/scenes/stanford-bunny.obj
 """
@@ -42,6 +44,7 @@ def main():
     ap.add_argument("--volley", default="build/release/volley")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=3, help="alternations of the C++ and the Python runs")
+    ap.add_argument("--threads", default="1", help="comma-separated thread counts (nthreads on the Python side)")
     ap.add_argument("--workload", default="primary", choices=["primary", "diffuse"],
                     help="the rays (diffuse: their tmin offset moved into the origin on both sides)")
     a = ap.parse_args()
@@ -73,23 +76,30 @@ def main():
             times.append(time.perf_counter() - t0)
         return min(times)
 
-    rows = {"cast_rays vs Accel::intersect(Ray*, n)": [[], []], "compute_distance vs Accel::distances": [[], []]}
+    threads = [int(t) for t in a.threads.split(",")]
+    calls = ("cast_rays vs Accel::intersect(Ray*, n)", "compute_distance vs Accel::distances")
+    best = {(c, t): ([], []) for c in calls for t in threads}  # C++ times, Python times
     for _ in range(a.rounds):
-        r = rows["cast_rays vs Accel::intersect(Ray*, n)"]
-        r[0].append(best_line(a.volley, ["trace", a.mesh, "--rays", rays_file, "--mode", "stream", "--threads", "1",
-                                         "--reps", str(a.reps)]))
-        r[1].append(py_best(lambda: scene.cast_rays(rays, nthreads=1)))
-        r = rows["compute_distance vs Accel::distances"]
-        r[0].append(best_line(a.volley, ["query", a.mesh, "--points", pts_file, "--op", "distance", "--threads", "1",
-                                         "--reps", str(a.reps)]))
-        r[1].append(py_best(lambda: scene.compute_distance(pts, nthreads=1)))
-    print(f"CPU: {cpu_model()}; mesh {a.mesh} ({len(triangles)} triangles); {len(rays)} {a.workload} rays / 1M points; one thread; "
-          f"best of {a.reps} x {a.rounds} alternating rounds\n")
-    print("| call | C++ ms | Python ms | Python overhead |\n|---|---|---|---|")
-    for name, (cpp, py) in rows.items():
-        c, p = min(cpp), min(py)
-        print(f"| {name} | {c * 1e3:.1f} | {p * 1e3:.1f} | {100 * (p / c - 1):+.1f}% |")
-
+        for t in threads:
+            mode = "stream" if t == 1 else "batch"
+            cpp, py = best[(calls[0], t)]
+            cpp.append(best_line(a.volley, ["trace", a.mesh, "--rays", rays_file, "--mode", mode, "--threads", str(t),
+                                            "--reps", str(a.reps)]))
+            py.append(py_best(lambda: scene.cast_rays(rays, nthreads=t)))
+            cpp, py = best[(calls[1], t)]
+            cpp.append(best_line(a.volley, ["query", a.mesh, "--points", pts_file, "--op", "distance", "--threads",
+                                            str(t), "--reps", str(a.reps)]))
+            py.append(py_best(lambda: scene.compute_distance(pts, nthreads=t)))
+    print(f"CPU: {cpu_model()} ({os.cpu_count()} cores); mesh {a.mesh} ({len(triangles)} triangles); {len(rays)} "
+          f"{a.workload} rays / 1M points; best of {a.reps} x {a.rounds} alternating rounds\n")
+    print("| call | threads | C++ ms | Python ms | Python overhead | C++ speedup | Python speedup |")
+    print("|---|---|---|---|---|---|---|")
+    for c in calls:
+        c1, p1 = (min(x) for x in best[(c, threads[0])])
+        for t in threads:
+            cpp, py = (min(x) for x in best[(c, t)])
+            print(f"| {c} | {t} | {cpp * 1e3:.1f} | {py * 1e3:.1f} | {100 * (py / cpp - 1):+.1f}% | "
+                  f"{c1 / cpp:.2f}x | {p1 / py:.2f}x |")
 
 if __name__ == "__main__":
     main()

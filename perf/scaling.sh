@@ -5,11 +5,13 @@
 # Each figure is the best of R runs. Environment: B (folder with the volley binary, default
 # build/release), SCENES (default ../shared/scenes), RAYS (ray files, default
 # /tmp/volley_embree_rays, made when missing), THREADS (default 1 2 4 ... up to nproc), R
-# (default 3), SPP (render samples per pixel, default 8).
+# (default 3), SPP (render samples per pixel, default 8), PARTS (any of build render trace
+# stream, default all four; stream: the multi-threaded stream, `volley trace --mode batch`,
+# the library spreading one call's rays over the threads).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${B:-build/release}; SCENES=${SCENES:-../shared/scenes}; RAYS=${RAYS:-/tmp/volley_embree_rays}
-R=${R:-3}; SPP=${SPP:-8}
+R=${R:-3}; SPP=${SPP:-8}; PARTS=${PARTS:-build render trace stream}
 cores=$(nproc)
 if [ -z "${THREADS:-}" ]; then
   THREADS=""; for ((t = 1; t <= cores; t *= 2)); do THREADS="$THREADS $t"; done
@@ -59,15 +61,29 @@ sweep() {
     row "$label" "$t" "$v" "$unit" "$base" "$higher"
   done
 }
-for scene in bench/embree/kitchen.json bench/embree/conference.json; do
+part() { [[ " $PARTS " == *" $1 "* ]]; }
+# Trace rows: "scene workload mode [options]" per line of $1, scenes from bench/embree or scenes/.
+trace_sweeps() {
+  local n w mode extra scene
+  while read -r n w mode extra; do
+    scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
+    [ -f "$RAYS/${n}_$w.vray" ] || "$B/volley" rays "$scene" --scenes "$SCENES" --workload "$w" -o "$RAYS/${n}_$w.vray" >/dev/null
+    sweep "trace $n $w ($mode${extra:+ $extra})" Mrays/s 1 trace_mrays "$scene" "$RAYS/${n}_$w.vray" "--mode $mode ${extra:-}"
+  done <<< "$1"
+}
+part build && for scene in bench/embree/kitchen.json bench/embree/conference.json; do
   sweep "build $(basename "$scene" .json)" s 0 build_s "$scene"
 done
-for scene in scenes/sponza.json bench/embree/conference.json; do
+part render && for scene in scenes/sponza.json bench/embree/conference.json; do
   sweep "render $(basename "$scene" .json), $SPP spp" s 0 render_s "$scene"
 done
-for spec in "kitchen diffuse single" "kitchen shadow single --occluded" "conference primary packet"; do
-  read -r n w mode extra <<< "$spec"
-  scene=bench/embree/$n.json
-  [ -f "$RAYS/${n}_$w.vray" ] || "$B/volley" rays "$scene" --scenes "$SCENES" --workload "$w" -o "$RAYS/${n}_$w.vray" >/dev/null
-  sweep "trace $n $w ($mode)" Mrays/s 1 trace_mrays "$scene" "$RAYS/${n}_$w.vray" "--mode $mode ${extra:-}"
-done
+part trace && trace_sweeps "kitchen diffuse single
+kitchen shadow single --occluded
+conference primary packet"
+part stream && trace_sweeps "kitchen diffuse batch
+kitchen shadow batch --occluded
+sponza diffuse batch
+sponza shadow batch --occluded
+conference diffuse batch
+bunny diffuse batch
+instances diffuse batch"

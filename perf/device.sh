@@ -1,0 +1,61 @@
+#!/bin/bash
+# Thread scaling on a lent device machine (16 cores; Ubuntu, no Debian packages, no
+# network). Two steps:
+#
+#   bash perf/device.sh pack     # here: fill .dev/ (git-ignored) with what travels
+#   bash perf/device.sh run      # there, in the repository root (the device tool's run,
+#                                # carry [".dev"]): the multi-threaded stream and the
+#                                # Python package's nthreads, at 1, 2, 4, 8, 16 threads
+#
+# What travels (about 55 MiB): the CLI and the Python extension built here, the Debian
+# libraries they load, Debian's python3.11 with its standard library and NumPy (the
+# extension is built for 3.11; the device's Python is another), and the benchmark meshes
+# gzipped (the kitchen's OBJ alone is over the 64 MiB a call may carry). Results go to
+# $OUT (the device tool's folder that comes back), or out/device without one.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+B=${B:-build/release}; SCENES=${SCENES:-../shared/scenes}
+MESHES="kitchen_partial.obj conference.obj sponza_dabrovic.obj stanford-bunny.obj bun_zipper.ply"
+
+pack() {
+  grep -qx '/.dev/' .git/info/exclude 2>/dev/null || echo '/.dev/' >> .git/info/exclude
+  rm -rf .dev && mkdir -p .dev/bin .dev/lib .dev/scenes .dev/py/bin .dev/py/lib .dev/py/site
+  cp "$B/volley" .dev/bin/
+  for l in libtbb.so.12 libtinyobjloader.so.2rc10 libstb.so.0 libblas.so.3; do cp -L "/lib/x86_64-linux-gnu/$l" .dev/lib/; done
+  for m in $MESHES; do gzip -c "$SCENES/$m" > ".dev/scenes/$m.gz"; done
+  cp /usr/bin/python3.11 .dev/py/bin/
+  tar -C /usr/lib -cf - --exclude=test --exclude=idlelib --exclude=tkinter --exclude=lib2to3 --exclude=ensurepip \
+    --exclude=__pycache__ --exclude='config-3.11*' --exclude=turtledemo python3.11 | tar -C .dev/py/lib -xf -
+  tar -C /usr/lib/python3/dist-packages -cf - --exclude=__pycache__ --exclude=tests numpy | tar -C .dev/py/site -xf -
+  cp -r "$B/python/volley" .dev/py/site/
+  tar -C .dev -cJf .dev/py.tar.xz py && rm -rf .dev/py
+  du -sh .dev
+}
+
+run() {
+  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
+  mkdir -p "$out" "$scenes" "$rays" build/device
+  cp .dev/bin/volley build/device/
+  export LD_LIBRARY_PATH=$PWD/.dev/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  for m in $MESHES; do gzip -dc ".dev/scenes/$m.gz" > "$scenes/$m"; done
+  tar -C /tmp -xJf .dev/py.tar.xz
+  # Larger ray files than the defaults, so that 16 threads get milliseconds of work.
+  local n w scene
+  for n in kitchen conference sponza bunny instances; do
+    scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
+    for w in diffuse shadow; do
+      build/device/volley rays "$scene" --scenes "$scenes" --workload "$w" --width 1280 --height 960 -o "$rays/${n}_$w.vray" >/dev/null
+    done
+  done
+  B=build/device SCENES=$scenes RAYS=$rays PARTS=stream R=${R:-5} THREADS=${THREADS:-1 2 4 8 16} \
+    bash perf/scaling.sh 2>&1 | tee "$out/stream_scaling.md"
+  env -i PATH=/usr/bin:/bin LD_LIBRARY_PATH="$LD_LIBRARY_PATH" PYTHONHOME=/tmp/py PYTHONPATH=/tmp/py/site \
+    /tmp/py/bin/python3.11 perf/python_overhead.py "$scenes/stanford-bunny.obj" --volley build/device/volley \
+    --workload diffuse --threads "$(echo "${THREADS:-1 2 4 8 16}" | tr ' ' ,)" --reps 5 --rounds 2 2>&1 | tee "$out/python_scaling.md"
+}
+
+case "${1:-}" in
+  pack) pack ;;
+  run) run ;;
+  *) echo "usage: bash perf/device.sh pack|run (see the comments at its top)" >&2; exit 2 ;;
+esac
