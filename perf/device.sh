@@ -6,6 +6,8 @@
 #   bash perf/device.sh run      # there, in the repository root (the device tool's run,
 #                                # carry [".dev"]): the multi-threaded stream and the
 #                                # Python package's nthreads, at 1, 2, 4, 8, 16 threads
+#   bash perf/device.sh smt      # there: the CPU topology, and the stream rows that scale
+#                                # least at 8 threads on 8 cores against 8 on 4 (siblings)
 #
 # What travels (about 55 MiB): the CLI and the Python extension built here, the Debian
 # libraries they load, Debian's python3.11 with its standard library and NumPy (the
@@ -32,13 +34,49 @@ pack() {
   du -sh .dev
 }
 
-run() {
-  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
+# Unpacks what pack made into the folders below (once per machine).
+unpack() {
   mkdir -p "$out" "$scenes" "$rays" build/device
   cp .dev/bin/volley build/device/
   export LD_LIBRARY_PATH=$PWD/.dev/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-  for m in $MESHES; do gzip -dc ".dev/scenes/$m.gz" > "$scenes/$m"; done
-  tar -C /tmp -xJf .dev/py.tar.xz
+  for m in $MESHES; do [ -f "$scenes/$m" ] || gzip -dc ".dev/scenes/$m.gz" > "$scenes/$m"; done
+  [ -d /tmp/py ] || tar -C /tmp -xJf .dev/py.tar.xz
+}
+
+# Whether the logical CPUs are SMT siblings: the figures of `run` at 16 threads on a
+# machine of 8 cores with two threads each cannot reach 16x for compute-bound rays.
+smt() {
+  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
+  unpack
+  { lscpu | grep -E "^(Model name|CPU\(s\)|Thread|Core|Socket|NUMA node\(s\)|L2|L3)"
+    for c in /sys/devices/system/cpu/cpu[0-9]*; do
+      echo "$(basename "$c"): siblings $(cat "$c/topology/thread_siblings_list" 2>/dev/null), core $(cat "$c/topology/core_id" 2>/dev/null)"
+    done
+    # One CPU per core, and the first 8 CPUs (siblings where there are any).
+    local per_core first8
+    per_core=$(for c in /sys/devices/system/cpu/cpu[0-9]*; do cut -d, -f1 < "$c/topology/thread_siblings_list" | cut -d- -f1; done | sort -un | head -8 | paste -sd,)
+    first8=$(seq -s, 0 7)
+    echo "one CPU per core: $per_core; first eight: $first8"
+    local n w extra scene
+    while read -r n w extra; do
+      scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
+      [ -f "$rays/${n}_$w.vray" ] || build/device/volley rays "$scene" --scenes "$scenes" --workload "$w" --width 1280 --height 960 -o "$rays/${n}_$w.vray" >/dev/null
+      for spec in "1 0" "8 $per_core" "8 $first8" "16 0-15"; do
+        read -r t cpus <<< "$spec"
+        printf '%s %s, %s threads on CPUs %s: ' "$n" "$w" "$t" "$cpus"
+        # shellcheck disable=SC2086  # $extra is a list of options
+        taskset -c "$cpus" build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" --mode batch \
+          --threads "$t" --reps 7 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1 Mrays\/s/p'
+      done
+    done <<< "bunny diffuse
+sponza shadow --occluded
+kitchen diffuse"
+  } 2>&1 | tee "$out/smt.md"
+}
+
+run() {
+  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
+  unpack
   # Larger ray files than the defaults, so that 16 threads get milliseconds of work.
   local n w scene
   for n in kitchen conference sponza bunny instances; do
@@ -57,5 +95,6 @@ run() {
 case "${1:-}" in
   pack) pack ;;
   run) run ;;
-  *) echo "usage: bash perf/device.sh pack|run (see the comments at its top)" >&2; exit 2 ;;
+  smt) smt ;;
+  *) echo "usage: bash perf/device.sh pack|run|smt (see the comments at its top)" >&2; exit 2 ;;
 esac
