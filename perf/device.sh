@@ -71,6 +71,28 @@ smt() {
     done <<< "bunny diffuse
 sponza shadow --occluded
 kitchen diffuse"
+    # One thread pinned to each CPU in turn, then all threads three times: on a host whose
+    # cores differ in speed, the ideal n-thread rate is the sum of the n one-thread rates.
+    while read -r n w extra; do
+      scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
+      local sum=0 cpu rate
+      printf '%s %s, one thread on each CPU:' "$n" "$w"
+      for cpu in $(seq 0 $(($(nproc) - 1))); do
+        # shellcheck disable=SC2086  # $extra is a list of options
+        rate=$(taskset -c "$cpu" build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" \
+          --mode batch --threads 1 --reps 5 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p')
+        printf ' %s' "$rate"
+        sum=$(awk -v a="$sum" -v b="$rate" 'BEGIN { print a + b }')
+      done
+      printf '; sum %s Mrays/s\n%s %s, %s threads:' "$sum" "$n" "$w" "$(nproc)"
+      for _ in 1 2 3; do
+        # shellcheck disable=SC2086
+        printf ' %s' "$(build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" --mode batch \
+          --threads "$(nproc)" --reps 7 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p')"
+      done
+      echo " Mrays/s"
+    done <<< "bunny diffuse
+sponza shadow --occluded"
   } 2>&1 | tee "$out/smt.md"
 }
 

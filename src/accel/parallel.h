@@ -11,6 +11,12 @@
 
 namespace volley::accel {
 
+/// An arena of `threads` slots for the calling thread, made at its first use and kept until
+/// the thread ends: a batch call that made its own arena woke and joined its workers anew
+/// each time (perf/rays.md, "16 threads"). Per calling thread, so that two callers asking
+/// for n threads each still get n each, as with an arena per call.
+tbb::task_arena& arena_of(int threads);
+
 /// Calls body(begin, end) over [0, count) in chunks of at least `grain`: on the current
 /// arena (threads = 0), on the calling thread alone (1), or on an arena of `threads`.
 /// Throws Error naming `caller` for threads < 0.
@@ -29,8 +35,7 @@ void for_chunks(const char* caller, std::size_t count, int threads, Body&& body,
   if (threads == 0) {
     run();
   } else {
-    tbb::task_arena arena(threads);
-    arena.execute(run);
+    arena_of(threads).execute(run);
   }
 }
 
