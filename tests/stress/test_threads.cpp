@@ -201,3 +201,31 @@ TEST_CASE("threads: the stream forms on 0, 2 and 3 threads give the one-thread a
     CHECK_THROWS_AS(accel.intersect(rays.data(), rays.size(), hits.data(), -1), volley::Error);
   }
 }
+
+TEST_CASE("threads: callers on four threads at once, each running 3-thread batches twice, get the one-thread answers") {
+  // Each calling thread keeps an arena per thread count (accel::arena_of): the second call
+  // reuses it, and callers do not share one.
+  const Soup soup = random_soup(3000, 89);
+  const std::vector<Ray> rays = mixed_rays(5000, 10.0f, 97);
+  const std::vector<Isa> isas = simd_isas();
+  const Accel accel = soup.accel(TriangleTest::watertight, isas.empty() ? Isa::scalar : isas.back());
+  std::vector<Hit> want(rays.size());
+  std::vector<std::uint8_t> want_blocked(rays.size());
+  accel.intersect(rays.data(), rays.size(), want.data());
+  accel.occluded(rays.data(), rays.size(), want_blocked.data());
+  std::atomic<int> wrong{0};
+  std::vector<std::thread> callers;
+  for (int t = 0; t < 4; ++t)
+    callers.emplace_back([&] {
+      for (int rep = 0; rep < 2; ++rep) {
+        std::vector<Hit> hits(rays.size());
+        std::vector<std::uint8_t> blocked(rays.size(), 7);
+        accel.intersect(rays.data(), rays.size(), hits.data(), 3);
+        accel.occluded(rays.data(), rays.size(), blocked.data(), 3);
+        wrong += std::memcmp(hits.data(), want.data(), hits.size() * sizeof(Hit)) != 0;
+        wrong += blocked != want_blocked;
+      }
+    });
+  for (auto& c : callers) c.join();
+  CHECK(wrong.load() == 0);
+}
