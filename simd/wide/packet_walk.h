@@ -123,7 +123,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             continue;
           }
           bool nearer = false;
-          for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
+          if constexpr (detail::packet_near_first<Query>())
+            for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
           float* slot = stack_dist[size];
           if (nearer) {
             stack_ref[size++] = next;
