@@ -176,6 +176,7 @@ template <class Kernels, bool AnyHit>
 struct InstancesPacket {
   using B = typename Kernels::Float;
   static constexpr int K = Kernels::K, L = Kernels::L;
+  static constexpr bool kNearFirst = !AnyHit;  // any hit: the node's slot order, as AnyHitPacket
   InstancePacketVisit visit;
   std::uint32_t hit = 0;  ///< lanes with a hit so far
 
