@@ -15,7 +15,8 @@ namespace volley::simd {
 // Packet traversal after Embree's BVHNIntersectorKHybrid: a stack of (subtree, entry
 // distance per lane), NaN for lanes that did not hit the subtree's box; a lane is active in
 // a subtree while its entry distance is within its current tmax (padded). Children are
-// visited nearest first by the heuristic "any lane enters it before the current best".
+// visited nearest first by the heuristic "any lane enters it before the current best",
+// unless the query says otherwise (P::kNearFirst = false: slot order, as any-hit single rays).
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane.
 template <class Arch, TriangleTest Test, bool Robust>

@@ -1,3 +1,4 @@
+// accel::arena_of: the oneTBB arenas the batch forms run on, one per calling thread and thread count.
 #include "accel/parallel.h"
 
 #include <map>
