@@ -33,6 +33,16 @@ def best_line(exe, args):
     return float(dict(kv.split("=", 1) for kv in line.split()[1:])["best_s"])
 
 
+def thread_counts(text):
+    try:
+        counts = [int(t) for t in text.split(",")]
+    except ValueError:
+        counts = []
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f"expected thread counts >= 1 separated by commas, got {text!r}")
+    return counts
+
+
 def cpu_model():
     with open("/proc/cpuinfo") as f:
         return next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), "unknown CPU")
@@ -44,7 +54,8 @@ def main():
     ap.add_argument("--volley", default="build/release/volley")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=3, help="alternations of the C++ and the Python runs")
-    ap.add_argument("--threads", default="1", help="comma-separated thread counts (nthreads on the Python side)")
+    ap.add_argument("--threads", default=[1], type=thread_counts,
+                    help="comma-separated thread counts, each 1 or more (nthreads on the Python side)")
     ap.add_argument("--workload", default="primary", choices=["primary", "diffuse"],
                     help="the rays (diffuse: their tmin offset moved into the origin on both sides)")
     a = ap.parse_args()
@@ -76,7 +87,7 @@ def main():
             times.append(time.perf_counter() - t0)
         return min(times)
 
-    threads = [int(t) for t in a.threads.split(",")]
+    threads = a.threads
     calls = ("cast_rays vs Accel::intersect(Ray*, n)", "compute_distance vs Accel::distances")
     best = {(c, t): ([], []) for c in calls for t in threads}  # C++ times, Python times
     for _ in range(a.rounds):
@@ -100,6 +111,7 @@ def main():
             cpp, py = (min(x) for x in best[(c, t)])
             print(f"| {c} | {t} | {cpp * 1e3:.1f} | {py * 1e3:.1f} | {100 * (py / cpp - 1):+.1f}% | "
                   f"{c1 / cpp:.2f}x | {p1 / py:.2f}x |")
+
 
 if __name__ == "__main__":
     main()
