@@ -16,7 +16,7 @@ namespace volley::simd {
 // distance per lane), NaN for lanes that did not hit the subtree's box; a lane is active in
 // a subtree while its entry distance is within its current tmax (padded). Children are
 // visited nearest first by the heuristic "any lane enters it before the current best",
-// unless the query says otherwise (P::kNearFirst = false: slot order, as any-hit single rays).
+// or, for a query with kNearFirst = false (any hit), in slot order as single rays.
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane.
 template <class Arch, TriangleTest Test, bool Robust>
@@ -124,7 +124,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             continue;
           }
           bool nearer = false;
-          if constexpr (detail::packet_near_first<Query>())
+          if constexpr (Query::kNearFirst)
             for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
           float* slot = stack_dist[size];
           if (nearer) {

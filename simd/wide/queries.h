@@ -16,8 +16,8 @@
 //                   walk, LeafStep::go_on otherwise.
 //   q.answer()      what the walk returns.
 // A packet query P (the walks in frustum_walk.h and packet_walk.h), per lane:
-//   P::kNearFirst   (optional, true if absent) false: the per-lane walk keeps the node's
-//                   slot order instead of putting the child some lane enters first next.
+//   P::kNearFirst   true: the per-lane walk puts next the child some lane enters first;
+//                   false: it keeps the node's slot order (any hit, as single rays).
 //   p.bound(o, tmax)                 the upper ends of lanes o .. o + L - 1 on entry.
 //   p.leaf(prep, blocks, count, lanes, tfar)
 //                   the leaf's triangles for `lanes`; lowers their tfar, and returns the
@@ -42,16 +42,6 @@ enum class LeafStep {
   narrowed,  ///< the bound fell: the walk refreshes its copy for the node tests
   done,      ///< the answer is known: the walk ends
 };
-
-/// Whether a packet query wants the children nearest first (P::kNearFirst, as for single
-/// rays; true where it does not say).
-template <class Query>
-constexpr bool packet_near_first() {
-  if constexpr (requires { Query::kNearFirst; })
-    return Query::kNearFirst;
-  else
-    return true;
-}
 
 /// What a packet query's leaf action tells the walk.
 struct LanesStep {
@@ -250,6 +240,7 @@ struct ClosestHitPacket {
   using B = typename Kernels::Float;
   using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
+  static constexpr bool kNearFirst = true;
   HitPacket<K>& hits;
 
   B bound(int o, B tmax) const { return upper_bound<typename Kernels::Isa>(B::load_aligned(hits.t + o), tmax); }
@@ -288,6 +279,7 @@ struct AllHitsPacket {
   using B = typename Kernels::Float;
   using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
+  static constexpr bool kNearFirst = true;
   Sink& sink;
 
   B bound(int, B tmax) const { return tmax; }
