@@ -34,7 +34,10 @@ pack() {
   du -sh .dev
 }
 
-# Unpacks what pack made into the folders below (once per machine).
+# Where `run` and `smt` work on the device machine.
+out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
+
+# Unpacks what pack made into the folders above (once per machine).
 unpack() {
   mkdir -p "$out" "$scenes" "$rays" build/device
   cp .dev/bin/volley build/device/
@@ -43,30 +46,47 @@ unpack() {
   [ -d /tmp/py ] || tar -C /tmp -xJf .dev/py.tar.xz
 }
 
-# Whether the logical CPUs are SMT siblings: the figures of `run` at 16 threads on a
-# machine of 8 cores with two threads each cannot reach 16x for compute-bound rays.
+# The scene file of a benchmark name (bench/embree/NAME.json or scenes/NAME.json).
+scene_of() { if [ -f "bench/embree/$1.json" ]; then echo "bench/embree/$1.json"; else echo "scenes/$1.json"; fi; }
+
+# The ray file of scene $1, workload $2, made when missing: larger than the defaults
+# (1280x960), so that 16 threads get milliseconds of work.
+ray_file() {
+  local f=$rays/$1_$2.vray
+  [ -f "$f" ] || build/device/volley rays "$(scene_of "$1")" --scenes "$scenes" --workload "$2" --width 1280 \
+    --height 960 -o "$f" >/dev/null
+  echo "$f"
+}
+
+# Mrays/s of a batch trace of scene $1, workload $2 on CPUs $3 with $4 threads, best of $5
+# repetitions; further arguments go to `volley trace`.
+batch_rate() {
+  local n=$1 w=$2 cpus=$3 threads=$4 reps=$5
+  shift 5
+  taskset -c "$cpus" build/device/volley trace "$(scene_of "$n")" --scenes "$scenes" --rays "$(ray_file "$n" "$w")" \
+    --mode batch --threads "$threads" --reps "$reps" "$@" | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p'
+}
+
+# Whether the logical CPUs are SMT siblings (the figures of `run` at 16 threads on a
+# machine of 8 cores with two threads each could not reach 16x for compute-bound rays),
+# and how fast one thread is on each CPU.
 smt() {
-  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
   unpack
   { lscpu | grep -E "^(Model name|CPU\(s\)|Thread|Core|Socket|NUMA node\(s\)|L2|L3)"
     for c in /sys/devices/system/cpu/cpu[0-9]*; do
       echo "$(basename "$c"): siblings $(cat "$c/topology/thread_siblings_list" 2>/dev/null), core $(cat "$c/topology/core_id" 2>/dev/null)"
     done
     # One CPU per core, and the first 8 CPUs (siblings where there are any).
-    local per_core first8
+    local per_core first8 all n w extra spec t cpus sum cpu rate
     per_core=$(for c in /sys/devices/system/cpu/cpu[0-9]*; do cut -d, -f1 < "$c/topology/thread_siblings_list" | cut -d- -f1; done | sort -un | head -8 | paste -sd,)
     first8=$(seq -s, 0 7)
+    all=0-$(($(nproc) - 1))
     echo "one CPU per core: $per_core; first eight: $first8"
-    local n w extra scene
     while read -r n w extra; do
-      scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
-      [ -f "$rays/${n}_$w.vray" ] || build/device/volley rays "$scene" --scenes "$scenes" --workload "$w" --width 1280 --height 960 -o "$rays/${n}_$w.vray" >/dev/null
-      for spec in "1 0" "8 $per_core" "8 $first8" "16 0-15"; do
+      for spec in "1 0" "8 $per_core" "8 $first8" "$(nproc) $all"; do
         read -r t cpus <<< "$spec"
-        printf '%s %s, %s threads on CPUs %s: ' "$n" "$w" "$t" "$cpus"
         # shellcheck disable=SC2086  # $extra is a list of options
-        taskset -c "$cpus" build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" --mode batch \
-          --threads "$t" --reps 7 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1 Mrays\/s/p'
+        echo "$n $w, $t threads on CPUs $cpus: $(batch_rate "$n" "$w" "$cpus" "$t" 7 $extra) Mrays/s"
       done
     done <<< "bunny diffuse
 sponza shadow --occluded
@@ -74,22 +94,17 @@ kitchen diffuse"
     # One thread pinned to each CPU in turn, then all threads three times: on a host whose
     # cores differ in speed, the ideal n-thread rate is the sum of the n one-thread rates.
     while read -r n w extra; do
-      scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
-      local sum=0 cpu rate
+      sum=0
       printf '%s %s, one thread on each CPU:' "$n" "$w"
       for cpu in $(seq 0 $(($(nproc) - 1))); do
-        # shellcheck disable=SC2086  # $extra is a list of options
-        rate=$(taskset -c "$cpu" build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" \
-          --mode batch --threads 1 --reps 5 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p')
+        # shellcheck disable=SC2086
+        rate=$(batch_rate "$n" "$w" "$cpu" 1 5 $extra)
         printf ' %s' "$rate"
         sum=$(awk -v a="$sum" -v b="$rate" 'BEGIN { print a + b }')
       done
       printf '; sum %s Mrays/s\n%s %s, %s threads:' "$sum" "$n" "$w" "$(nproc)"
-      for _ in 1 2 3; do
-        # shellcheck disable=SC2086
-        printf ' %s' "$(build/device/volley trace "$scene" --scenes "$scenes" --rays "$rays/${n}_$w.vray" --mode batch \
-          --threads "$(nproc)" --reps 7 $extra | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p')"
-      done
+      # shellcheck disable=SC2086
+      for _ in 1 2 3; do printf ' %s' "$(batch_rate "$n" "$w" "$all" "$(nproc)" 7 $extra)"; done
       echo " Mrays/s"
     done <<< "bunny diffuse
 sponza shadow --occluded"
@@ -97,15 +112,10 @@ sponza shadow --occluded"
 }
 
 run() {
-  local out=${OUT:-out/device} scenes=/tmp/volley_scenes rays=/tmp/volley_device_rays
   unpack
-  # Larger ray files than the defaults, so that 16 threads get milliseconds of work.
-  local n w scene
+  local n w
   for n in kitchen conference sponza bunny instances; do
-    scene=bench/embree/$n.json; [ -f "$scene" ] || scene=scenes/$n.json
-    for w in diffuse shadow; do
-      build/device/volley rays "$scene" --scenes "$scenes" --workload "$w" --width 1280 --height 960 -o "$rays/${n}_$w.vray" >/dev/null
-    done
+    for w in diffuse shadow; do ray_file "$n" "$w" >/dev/null; done
   done
   B=build/device SCENES=$scenes RAYS=$rays PARTS=stream R=${R:-5} THREADS=${THREADS:-1 2 4 8 16} \
     bash perf/scaling.sh 2>&1 | tee "$out/stream_scaling.md"
