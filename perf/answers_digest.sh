@@ -5,7 +5,8 @@
 # (W x H pixels), then `volley trace -o` answers it in every mode (single, packet 4/8/16,
 # stream) x test x ISA this CPU has (and the scalar oracle and the double reference), closest
 # hit and occlusion; each line is the configuration and the sha256 of its .vhit.
-# Usage: perf/answers_digest.sh [BUILD_DIR] > answers.txt   (env: SCENES, W, H)
+# Usage: perf/answers_digest.sh [BUILD_DIR] > answers.txt   (env: SCENES, W, H; EXTRA: flags
+# added to every trace, e.g. EXTRA="--quality high" to compare build qualities)
 set -euo pipefail
 build=${1:-build/release}
 volley="$build/volley"
@@ -33,7 +34,7 @@ for scene in $scenes; do
         for mode in "single" "packet --packet 4" "packet --packet 8" "packet --packet 16" "stream"; do
           for query in "" "--occluded"; do
             # shellcheck disable=SC2086
-            "$volley" trace "$scene" --rays "$rays" --test "$test" $config --mode $mode $query --reps 1 --threads 1 \
+            "$volley" trace "$scene" --rays "$rays" --test "$test" $config --mode $mode $query --reps 1 --threads 1 ${EXTRA:-} \
               -o "$work/hits.vhit" >/dev/null
             echo "$(basename "$scene") $workload $test ${config// /=} ${mode// /=} ${query:-closest} $(sha256sum < "$work/hits.vhit" | cut -c1-16)"
           done

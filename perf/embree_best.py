@@ -3,10 +3,12 @@
 
 For every scene and workload, `volley_vs_embree` runs every mode of the workload (1-wide,
 16-wide and stream calls; closest hit for primary and diffuse rays, occlusion for shadow
-rays) twice, with Embree built at medium and at high quality, alternating the two engines
-repetition by repetition (FTZ/DAZ on for both). Embree's best is the fastest of those six
-rows, volley's the fastest of its modes; the ratio is volley best / Embree best. Beside
-it, what volley's single-ray walk visits per ray (`volley trace --stats`).
+rays) twice: Embree and volley both built at medium quality, then both at high quality
+(volley's high adds spatial splits, as Embree's does), alternating the two engines
+repetition by repetition (FTZ/DAZ on for both). Embree's best is the fastest of its six
+rows, volley's the fastest of its six (mode and quality named); the ratio is volley best /
+Embree best. Beside it, what volley's single-ray walk visits per ray at the quality of its
+best (`volley trace --stats`).
 
 Prints a markdown table with the CPU model. Environment: B (build folder, default
 build/release), R (repetitions, default 5), SCENES (default ../shared/scenes), RAYS (where
@@ -53,7 +55,7 @@ def main():
     only = set(filter(None, os.environ.get("ONLY", "").split(",")))
     os.makedirs(RAYS, exist_ok=True)
     print(f"CPU: {cpu_model()}, {os.cpu_count()} cores; one thread; R = {R} repetitions per engine, mode and quality\n")
-    print("| scene | rays | Embree best Mrays/s (call, quality) | volley best Mrays/s (mode) | volley / Embree |"
+    print("| scene | rays | Embree best Mrays/s (call, quality) | volley best Mrays/s (mode, quality) | volley / Embree |"
           " nodes/ray | leaves/ray | triangles/ray | agreement |")
     print("|---|---|---|---|---|---|---|---|---|")
     for name, scene in SCENES:
@@ -67,14 +69,16 @@ def main():
             for quality in ("medium", "high"):
                 with tempfile.NamedTemporaryFile(suffix=".json") as out:
                     run([f"{B}/volley_vs_embree", scene, "--scenes", SCENES_DIR, "--rays", rays, "--modes",
-                         MODES[workload], "--reps", R, "--quality", quality, "--json", out.name])
+                         MODES[workload], "--reps", R, "--quality", quality, "--volley-quality", quality,
+                         "--json", out.name])
                     result = json.load(open(out.name))
                 for m in result["modes"]:
                     embree = max(embree, (m["embree_mrays"], f"{m['embree_call']}, {quality}"))
-                    volley = max(volley, (m["volley_mrays"], m["mode"]))
+                    volley = max(volley, (m["volley_mrays"], f"{m['mode']}, {quality}"))
                     agreement = min(agreement, m["agreement"])
             stats = run([f"{B}/volley", "trace", scene, "--scenes", SCENES_DIR, "--rays", rays, "--reps", "1",
-                         "--threads", "1", "--stats"] + (["--occluded"] if workload == "shadow" else []))
+                         "--threads", "1", "--stats", "--quality", volley[1].split(", ")[1]] +
+                        (["--occluded"] if workload == "shadow" else []))
             walk = re.search(r"nodes/ray=([0-9.]+) leaves/ray=([0-9.]+) triangles/ray=([0-9.]+)", stats)
             print(f"| {name} | {workload} | {embree[0]:.2f} ({embree[1]}) | {volley[0]:.2f} ({volley[1]}) | "
                   f"{volley[0] / embree[0]:.2f} | {float(walk[1]):.2f} | {float(walk[2]):.2f} | "

@@ -3,7 +3,7 @@
 //
 //   volley_vs_embree SCENE (--rays RAYS.vray | --workload primary|shadow|diffuse)
 //                    [--modes single,packet,stream,occluded1,occluded16,occluded_stream]
-//                    [--reps N] [--quality medium|high] [--robust] [--coherent]
+//                    [--reps N] [--quality medium|high] [--volley-quality medium|high] [--robust] [--coherent]
 //                    [--test ...] [--isa ...] [--json OUT.json] [--embree-config STR] [--no-ftz]
 //
 // Both engines get the scene's merged triangle mesh (triangle i = prim id i; scenes with
@@ -56,6 +56,7 @@ struct Args {
   std::string modes = "single,packet,stream,occluded1,occluded16,occluded_stream";
   int reps = 10;
   std::string quality = "medium";
+  std::string volley_quality = "medium";
   bool robust = false;
   bool coherent = false;
   std::string test = "watertight";
@@ -184,6 +185,7 @@ int run(const Args& a) {
   Options options;
   options.test = *parse_triangle_test(a.test);
   options.isa = *parse_isa(a.isa);
+  options.quality = *parse_build_quality(a.volley_quality);
   const int width = a.width ? a.width : desc.settings.width;
   const int height = a.height ? a.height : desc.settings.height;
   // The scene's Accel holds exactly the mesh triangles (no polygons), prim id = index.
@@ -335,6 +337,9 @@ int main(int argc, char** argv) {
   app.add_option("--quality", a.quality, "Embree build quality")->check(CLI::IsMember({"medium", "high"}))->capture_default_str();
   app.add_flag("--robust", a.robust, "Embree scene flag ROBUST (default NONE)");
   app.add_flag("--coherent", a.coherent, "Embree intersect context flag COHERENT (default INCOHERENT)");
+  app.add_option("--volley-quality", a.volley_quality, "volley's build quality (Options::quality)")
+      ->check(CLI::IsMember({"medium", "high"}))
+      ->capture_default_str();
   app.add_option("--test", a.test, "volley's triangle test")->check(CLI::IsMember({"plane", "moller", "watertight"}))->capture_default_str();
   app.add_option("--isa", a.isa, "volley's ISA")->check(CLI::IsMember({"auto", "scalar", "sse4.2", "avx2", "avx512"}))->capture_default_str();
   app.add_option("--scenes", a.scenes, "Folder of shared meshes for ${scenes}/ paths");

@@ -59,8 +59,11 @@ add meshes, then cast rays or query points; the scene builds itself before the f
 after a change. Rays are arrays (..., 6) of origin and direction, points (..., 3), of any
 real dtype (converted to float32 once). Misses: t_hit inf, ids INVALID_ID. Batch calls
 release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
-      .def(py::init<const std::string&, const std::string&>(), py::arg("test") = "watertight", py::arg("isa") = "auto",
-           "test: 'watertight' (default), 'moller' or 'plane'; isa: 'auto', 'scalar', 'sse4.2', 'avx2', 'avx512'")
+      .def(py::init<const std::string&, const std::string&, const std::string&>(), py::arg("test") = "watertight",
+           py::arg("isa") = "auto", py::arg("quality") = "medium",
+           "test: 'watertight' (default), 'moller' or 'plane'; isa: 'auto', 'scalar', 'sse4.2', 'avx2', 'avx512'; "
+           "quality: 'medium' (binned SAH, default) or 'high' (also spatial splits: slower to build, faster rays "
+           "where triangles are long; the same answers)")
       .def("add_triangles", &RaycastingScene::add_triangles, py::arg("vertices"), py::arg("triangles"),
            "Adds a mesh: vertices (N, 3), triangles (M, 3) vertex indices. Returns its geometry id.")
       .def("add_instance", &RaycastingScene::add_instance, py::arg("prototype"), py::arg("transform"),

@@ -92,11 +92,17 @@ Isa parse_isa_name(const std::string& s) {
   throw py::value_error("isa: expected \"auto\", \"scalar\", \"sse4.2\", \"avx2\" or \"avx512\", got \"" + s + "\"");
 }
 
+BuildQuality parse_quality(const std::string& s) {
+  if (auto q = parse_build_quality(s)) return *q;
+  throw py::value_error("quality: expected \"medium\" or \"high\", got \"" + s + "\"");
+}
+
 }  // namespace
 
-RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa) {
+RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality) {
   options_.test = parse_test(test);
   options_.isa = parse_isa_name(isa);
+  options_.quality = parse_quality(quality);
 }
 
 void RaycastingScene::require_geometry(const char* caller, std::uint32_t geometry) const {
@@ -333,6 +339,7 @@ py::dict RaycastingScene::info() {
   d["sah_cost"] = i.sah_cost, d["build_seconds"] = i.build_seconds, d["load_seconds"] = i.load_seconds;
   d["loaded"] = i.loaded, d["refitted"] = i.refitted, d["width"] = i.width, d["block_width"] = i.block_width;
   d["test"] = std::string(to_string(i.test)), d["isa"] = std::string(to_string(i.isa)), d["robust"] = i.robust;
+  d["quality"] = std::string(to_string(i.quality)), d["references"] = i.references;
   return d;
 }
 
@@ -342,7 +349,7 @@ std::shared_ptr<RaycastingScene> RaycastingScene::load(const std::string& path) 
   auto s = std::make_shared<RaycastingScene>("watertight", "auto");
   s->accel_ = Accel::load(path);
   const AccelInfo i = s->accel_.info();
-  s->options_.test = i.test, s->options_.isa = i.isa;
+  s->options_.test = i.test, s->options_.isa = i.isa, s->options_.quality = i.quality;
   s->geometries_.resize(i.geometries);
   s->loaded_ = true;
   s->dirty_ = false;
@@ -365,12 +372,16 @@ py::tuple RaycastingScene::get_state() const {
     geometries.append(d);
   }
   const std::string isa = options_.isa == Isa::automatic ? "auto" : std::string(to_string(options_.isa));
-  return py::make_tuple(1, std::string(to_string(options_.test)), isa, geometries);
+  return py::make_tuple(1, std::string(to_string(options_.test)), isa, geometries,
+                        std::string(to_string(options_.quality)));
 }
 
 std::shared_ptr<RaycastingScene> RaycastingScene::from_state(const py::tuple& state) {
-  if (state.size() != 4 || state[0].cast<int>() != 1) throw py::value_error("not a pickled volley.RaycastingScene (version 1)");
-  auto s = std::make_shared<RaycastingScene>(state[1].cast<std::string>(), state[2].cast<std::string>());
+  // Version 1 with the build quality as a fifth item (pickles from before it have four: medium).
+  if ((state.size() != 4 && state.size() != 5) || state[0].cast<int>() != 1)
+    throw py::value_error("not a pickled volley.RaycastingScene (version 1)");
+  auto s = std::make_shared<RaycastingScene>(state[1].cast<std::string>(), state[2].cast<std::string>(),
+                                             state.size() == 5 ? state[4].cast<std::string>() : "medium");
   for (const py::handle& item : state[3].cast<py::list>()) {
     const py::dict d = item.cast<py::dict>();
     const std::uint32_t id = d.contains("prototype")

@@ -19,8 +19,9 @@ namespace py = pybind11;
 class RaycastingScene {
  public:
   /// `test`: "watertight" (default), "moller" or "plane"; `isa`: "auto" (default), "scalar",
-  /// "sse4.2", "avx2" or "avx512". ValueError for another name.
-  RaycastingScene(const std::string& test, const std::string& isa);
+  /// "sse4.2", "avx2" or "avx512"; `quality`: "medium" (default) or "high" (spatial splits).
+  /// ValueError for another name.
+  RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality = "medium");
 
   std::uint32_t add_triangles(const py::handle& vertices, const py::handle& triangles);
   std::uint32_t add_instance(const std::shared_ptr<RaycastingScene>& prototype, const py::handle& transform);

@@ -124,6 +124,8 @@ void Accel::commit(const Options& options) {
   if (options.reference_double && isa != Isa::scalar)
     throw Error("commit: reference_double runs the scalar oracle in double precision and needs Isa::scalar, got " +
                 std::string(to_string(isa)) + (options.isa == Isa::automatic ? " (from Isa::automatic)" : ""));
+  if (options.quality != BuildQuality::medium && options.quality != BuildQuality::high)
+    throw Error("commit: quality is not a BuildQuality (medium or high)");
   if (options.reference_double && !options.robust)
     throw Error("commit: reference_double traverses with robust slabs; robust = false contradicts it");
   Options resolved = options;
@@ -132,6 +134,7 @@ void Accel::commit(const Options& options) {
   impl_->test = options.test;
   impl_->robust = options.robust;
   impl_->reference_double = options.reference_double;
+  impl_->quality = options.quality;
   // A build that fails half way leaves no structure to query: uncommitted until it is done.
   impl_->committed = false;
   try {

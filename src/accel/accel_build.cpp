@@ -112,7 +112,9 @@ void Accel::Impl::build() {
       layer.triangle_engine = isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
                               : reference_double ? accel::make_reference_engine(test)
                                                  : accel::make_oracle_engine(test, robust);
-      core::Bvh bvh = core::build_bvh(boxes, layer.triangle_engine->bvh_options());
+      core::Bvh bvh = quality == BuildQuality::high
+                          ? core::build_bvh_spatial(boxes, triangles.data(), layer.triangle_engine->bvh_options())
+                          : core::build_bvh(boxes, layer.triangle_engine->bvh_options());
       // Reported with unit costs (AccelInfo: node visit = 1, triangle test = 1).
       layer.triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
       layer.triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, layer.excluded.data()});
@@ -157,7 +159,9 @@ void Accel::Impl::finish_build() {
                                               : !l.polygon_engine && !l.instances.empty();
                    });
   topology_changed = vertices_changed = refitted = false;
-  built_with = {test, isa, robust, reference_double};
+  built_with = Options{};
+  built_with.test = test, built_with.isa = isa, built_with.robust = robust;
+  built_with.reference_double = reference_double, built_with.quality = quality;
 }
 
 double Accel::Impl::built_sah() const {
@@ -174,7 +178,8 @@ double Accel::Impl::sah_now() const {
 
 bool Accel::Impl::refit(const Options& options) {
   const bool same = options.test == built_with.test && options.isa == built_with.isa &&
-                    options.robust == built_with.robust && options.reference_double == built_with.reference_double;
+                    options.robust == built_with.robust && options.reference_double == built_with.reference_double &&
+                    options.quality == built_with.quality;
   const bool any_triangles = std::any_of(layers.begin(), layers.end(), [](const Layer& l) { return l.triangle_engine != nullptr; });
   if (!options.refit || !same || topology_changed || !vertices_changed || !any_triangles) return false;
   // A triangle the build left out as degenerate that now has area needs a build (which
@@ -222,26 +227,29 @@ AccelInfo Accel::Impl::info() const {
   info.isa = isa;
   info.robust = robust;
   info.reference_double = reference_double;
+  info.quality = quality;
   info.build_seconds = build_seconds;
   // One layer as its engines describe it; several: the counts summed, the costs and the
   // shape of the layer with the most nodes.
   std::size_t most_nodes = 0;
   for (const Layer& l : layers) {
     AccelInfo part = info;
-    part.nodes = part.leaves = part.depth = part.bytes = part.blocks = 0;
+    part.nodes = part.leaves = part.depth = part.bytes = part.blocks = part.references = 0;
     if (l.triangle_engine && l.triangle_stats.nodes != 0) {
       part.binary_sah_cost = l.triangle_stats.sah_cost;
       l.triangle_engine->describe(part);
     }
     if (l.polygon_engine) l.polygon_engine->describe(part);
     const std::size_t nodes = info.nodes + part.nodes, leaves = info.leaves + part.leaves,
-                      bytes = info.bytes + part.bytes, blocks = info.blocks + part.blocks;
+                      bytes = info.bytes + part.bytes, blocks = info.blocks + part.blocks,
+                      references = info.references + part.references;
     const std::size_t depth = std::max(info.depth, part.depth);
     if (part.nodes >= most_nodes) {
       most_nodes = part.nodes;
       info = part;
     }
     info.nodes = nodes, info.leaves = leaves, info.bytes = bytes, info.blocks = blocks, info.depth = depth;
+    info.references = references;
   }
   // Instances: their records and BVHs (the prototypes' structures are theirs, shared).
   info.bytes += instances.size() * (sizeof(Instance) + sizeof(Geometry));

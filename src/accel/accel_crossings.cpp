@@ -28,11 +28,19 @@ void sort_hits(Hit* first, Hit* last) {
   });
 }
 
+void drop_repeated_hits(std::vector<Hit>& hits, std::size_t first) {
+  if (hits.size() - first < 2) return;
+  const auto begin = hits.begin() + static_cast<std::ptrdiff_t>(first);
+  std::sort(begin, hits.end(), [](const Hit& a, const Hit& b) { return a.prim < b.prim; });
+  hits.erase(std::unique(begin, hits.end(), [](const Hit& a, const Hit& b) { return a.prim == b.prim; }), hits.end());
+}
+
 void Accel::Impl::all_hits(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const {
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
     const std::size_t first = out.size();
     if (l.triangle_engine) l.triangle_engine->all_hits(ray, out);
+    if (quality == BuildQuality::high) drop_repeated_hits(out, first);
     if (l.polygon_engine) l.polygon_engine->all_hits(ray, out);
     for (std::size_t i = first; i < out.size(); ++i) attribute(out[i].prim, out[i].geom);
   }

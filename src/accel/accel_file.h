@@ -59,7 +59,8 @@ struct Meta {
   std::uint64_t geometries, triangles, polygons, next_id;
   std::uint64_t degenerate, disabled, layers;
   double build_seconds;
-  std::uint32_t refitted, zero;
+  std::uint32_t refitted;
+  std::uint32_t quality;  ///< BuildQuality (0, medium, in files written before it was recorded)
 };
 
 /// One geometry (Accel::Impl::Geometry without its indices, which are in the indices chunk).

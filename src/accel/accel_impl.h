@@ -30,6 +30,11 @@ namespace volley {
 /// Hits nearest first; ties (one t on two primitives) by instance, geometry, primitive.
 void sort_hits(Hit* first, Hit* last);
 
+/// Drops repeated triangles from hits[first ..): with spatial splits (BuildQuality::high) a
+/// triangle may sit in several leaves a ray enters, and each test of it gives the same hit
+/// (the same test of the same ray), so one of each is kept. The order of the rest changes.
+void drop_repeated_hits(std::vector<Hit>& hits, std::size_t first);
+
 /// The ray of contains(): from the point along kContainsDirection, t >= 0.
 inline Ray contains_ray(const float* p) {
   return Ray{{p[0], p[1], p[2]}, 0.0f, {kContainsDirection[0], kContainsDirection[1], kContainsDirection[2]},
@@ -101,6 +106,7 @@ struct Accel::Impl {
   Isa isa = Isa::scalar;
   bool robust = true;             ///< Options::robust: padded slab tests
   bool reference_double = false;  ///< Options::reference_double (isa == scalar only)
+  BuildQuality quality = BuildQuality::medium;  ///< Options::quality (high: triangles may repeat in leaves)
   double build_seconds = 0.0;
   std::size_t degenerate = 0;
   std::size_t disabled = 0;       ///< geometries left out at the commit

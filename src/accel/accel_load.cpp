@@ -67,6 +67,8 @@ void Accel::Impl::load_from(const std::string& path) {
             ", which this CPU lacks (build the structure here, or save it with an ISA this CPU has)");
 
   const file::Meta& meta = in.one<file::Meta>(file::Tag::meta);
+  if (meta.quality > static_cast<std::uint32_t>(BuildQuality::high)) in.fail("the build quality is not valid");
+  quality = static_cast<BuildQuality>(meta.quality);
   std::uint64_t vertex_total = 0;
   read_geometries(in, meta, in.next<file::GeometryRecord>(file::Tag::geometries), vertex_total);
   const auto vertices = in.next<float>(file::Tag::vertices, [&](std::span<const float> slab) {

@@ -21,6 +21,7 @@ void Accel::Impl::save_to(const std::string& path) const {
   meta.layers = layers.size();
   meta.build_seconds = build_seconds;
   meta.refitted = refitted;
+  meta.quality = static_cast<std::uint32_t>(quality);
 
   std::vector<file::GeometryRecord> records;
   std::vector<std::uint32_t> polygon_sizes;

@@ -2,6 +2,7 @@
 // share: single-ray queries on core/'s binary BVH walk with the committed slab test, and
 // for triangles the BVH and plane data they keep.
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <utility>
 #include <vector>
@@ -108,6 +109,7 @@ class ScalarTriangleEngine : public ScalarQueries<Derived, TriangleEngine> {
     info.sah_cost = stats_.sah_cost;
     info.mean_leaf_size = stats_.mean_leaf_size;
     info.mean_children = 2.0;
+    info.references = static_cast<std::size_t>(std::llround(stats_.mean_leaf_size * double(stats_.leaves)));
     // The triangle layout of the test in use (the input copy kept for re-commits not counted).
     info.bytes = stats_.bytes + (test_ == TriangleTest::plane ? planes_.size() * sizeof(core::PlaneTriangle<Real>)
                                                               : triangles_.count * 3 * sizeof(glm::vec3));

@@ -72,6 +72,7 @@ class WideEngine final : public TriangleEngine {
     info.mean_leaf_size = w.leaves ? double(w.triangles) / double(w.leaves) : 0.0;
     info.bytes = w.bytes;
     info.blocks = w.blocks;
+    info.references = w.triangles;
     info.mean_children = w.mean_children;
     info.block_fill = w.blocks ? double(w.triangles) / double(w.blocks * std::size_t(info.block_width)) : 0.0;
   }

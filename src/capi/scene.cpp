@@ -51,6 +51,16 @@ Isa to_isa(int isa) {
   fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown ISA " + std::to_string(isa) + " (expected a VOLLEY_ISA_* value)");
 }
 
+/// The C++ build quality for a C enum value (as raw_value); fails for one outside the enum.
+volley::BuildQuality to_quality(int quality) {
+  switch (quality) {
+    case VOLLEY_BUILD_QUALITY_MEDIUM: return volley::BuildQuality::medium;
+    case VOLLEY_BUILD_QUALITY_HIGH: return volley::BuildQuality::high;
+  }
+  fail(VOLLEY_ERROR_INVALID_ARGUMENT, "unknown build quality " + std::to_string(quality) +
+                                          " (expected VOLLEY_BUILD_QUALITY_MEDIUM or VOLLEY_BUILD_QUALITY_HIGH)");
+}
+
 volley_triangle_test from_test(TriangleTest test) {
   switch (test) {
     case TriangleTest::plane: return VOLLEY_TEST_PLANE;
@@ -112,6 +122,7 @@ volley_status commit(volley_scene* scene, const volley_commit_options* in, const
     options.robust = in->robust != 0;
     options.reference_double = in->reference_double != 0;
     options.refit = in->refit != 0;
+    options.quality = to_quality(raw_value(in->quality));
     if (options.reference_double && (options.isa != volley::Isa::scalar || !options.robust))
       fail(VOLLEY_ERROR_INVALID_ARGUMENT, "reference_double needs VOLLEY_ISA_SCALAR and robust box tests");
     try {
@@ -259,6 +270,7 @@ void volley_commit_options_default(volley_commit_options* options) {
   options->robust = 1;
   options->reference_double = 0;
   options->refit = 1;
+  options->quality = VOLLEY_BUILD_QUALITY_MEDIUM;
 }
 
 volley_status volley_scene_commit(volley_scene* scene, volley_triangle_test test, volley_isa isa) {
@@ -300,6 +312,8 @@ volley_status volley_scene_get_info(const volley_scene* scene, volley_scene_info
     out.instances = a.instances;
     out.instanced_triangles = a.instanced_triangles;
     out.load_seconds = a.load_seconds;
+    out.quality = a.quality == volley::BuildQuality::high ? VOLLEY_BUILD_QUALITY_HIGH : VOLLEY_BUILD_QUALITY_MEDIUM;
+    out.references = a.references;
     *info = out;
   });
 }

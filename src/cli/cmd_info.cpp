@@ -44,10 +44,15 @@ Runner register_info(CLI::App& app) {
     std::printf("kernel      test %s, isa %s, %s box tests, %s triangle tests\n",
                 std::string(to_string(info.test)).c_str(), std::string(to_string(info.isa)).c_str(),
                 info.robust ? "robust (padded)" : "fast (unpadded)", info.reference_double ? "double" : "float");
-    std::printf("bvh         %d-wide: %zu nodes (%.2f children each), %zu leaves, depth %zu, %.2f primitives/leaf, "
-                "SAH cost %.2f (binary binned-SAH tree: %.2f)\n",
-                info.width, info.nodes, info.mean_children, info.leaves, info.depth, info.mean_leaf_size, info.sah_cost,
+    const bool high = info.quality == BuildQuality::high;
+    std::printf("bvh         %d-wide, %s quality: %zu nodes (%.2f children each), %zu leaves, depth %zu, %.2f "
+                "primitives/leaf, SAH cost %.2f (binary %s tree: %.2f)\n",
+                info.width, std::string(to_string(info.quality)).c_str(), info.nodes, info.mean_children, info.leaves,
+                info.depth, info.mean_leaf_size, info.sah_cost, high ? "spatial-split SAH" : "binned-SAH",
                 info.binary_sah_cost);
+    if (high)
+      std::printf("references  %zu triangle references in the leaves for %zu triangles (spatial splits)\n",
+                  info.references, info.triangles - info.degenerate);
     if (info.blocks)
       std::printf("blocks      %zu of %d triangles, %.0f%% of lanes used\n", info.blocks, info.block_width,
                   100.0 * info.block_fill);

@@ -14,6 +14,11 @@ void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
   cmd.add_option("--isa", args.isa, "Kernel instruction set (VOLLEY_ISA also sets it)")
       ->check(CLI::IsMember({"auto", "scalar", "sse4.2", "avx2", "avx512"}))
       ->capture_default_str();
+  cmd.add_option("--quality", args.quality,
+                 "BVH build quality: medium (binned SAH) or high (also spatial splits: a slower build, faster "
+                 "rays where triangles are long, e.g. Sponza; the same answers)")
+      ->check(CLI::IsMember({"medium", "high"}))
+      ->capture_default_str();
   CLI::Option* fast = cmd.add_flag("--fast-slabs", args.fast_slabs,
                                    "Plain BVH box tests, no padding against rounding (faster; may miss a triangle "
                                    "whose box a ray only grazes)");
@@ -31,6 +36,7 @@ Options kernel_options(const KernelArgs& args) {
   o.test = *parse_triangle_test(args.test);
   o.isa = *parse_isa(args.isa);
   o.robust = !args.fast_slabs;
+  o.quality = *parse_build_quality(args.quality);
   o.reference_double = args.reference;
   if (args.reference && o.isa == Isa::automatic) o.isa = Isa::scalar;
   if (args.reference && o.isa != Isa::scalar)

@@ -9,16 +9,17 @@
 
 namespace volley::cli {
 
-/// Options every tracing subcommand takes (--test, --isa, --fast-slabs, --reference, --scenes).
+/// Options every tracing subcommand takes (--test, --isa, --quality, --fast-slabs, --reference, --scenes).
 struct KernelArgs {
   std::string test = "watertight";
   std::string isa = "auto";
+  std::string quality = "medium";  ///< Options::quality
   bool fast_slabs = false;  ///< Options::robust = false
   bool reference = false;   ///< Options::reference_double on Isa::scalar
   std::string scenes;       ///< folder of shared meshes for ${scenes}/ paths in scene files
 };
 
-/// Registers --test, --isa, --fast-slabs, --reference and --scenes on a subcommand.
+/// Registers --test, --isa, --quality, --fast-slabs, --reference and --scenes on a subcommand.
 void add_kernel_options(CLI::App& cmd, KernelArgs& args);
 
 /// The Accel options the arguments name (validated by CLI11 already). --reference picks

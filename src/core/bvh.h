@@ -67,6 +67,23 @@ struct BvhBuildOptions {
 /// std::length_error for more than 2^32 - 1 primitives.
 Bvh build_bvh(std::span<const BBox> prim_boxes, const BvhBuildOptions& options = {});
 
+/// Throws std::invalid_argument, naming `builder`, for options outside the ranges above.
+void check_build_options(const BvhBuildOptions& options, const char* builder);
+
+/// Builds a binary BVH with spatial splits (Stich, Friedrich, Dietrich, "Spatial splits in
+/// bounding volume hierarchies", HPG 2009) over triangles: primitive i is the triangle
+/// vertices[3i .. 3i + 3), prim_boxes[i] its box (an empty box leaves it out of the tree).
+/// Each node takes the cheapest by SAH of a leaf, the binned object split, and (where the
+/// object split's children overlap) a binned spatial split, which cuts the triangles that
+/// straddle its plane into references with clipped boxes; the splits add at most
+/// max_growth * n references. prim_index may then name a triangle in several leaves, and
+/// its size is that of the references. Clipping rounds outwards: the boxes of a
+/// triangle's references cover it. Parallel on oneTBB; the same tree for any number of
+/// threads. Throws std::invalid_argument for options outside build_bvh's ranges or
+/// max_growth outside [0, 16].
+Bvh build_bvh_spatial(std::span<const BBox> prim_boxes, const glm::vec3* vertices,
+                      const BvhBuildOptions& options = {}, double max_growth = 1.0);
+
 /// Size and quality of a BVH (for `volley info`, tests and benchmarks).
 struct BvhStats {
   std::size_t nodes = 0;        ///< interior nodes + leaves

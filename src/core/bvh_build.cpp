@@ -47,8 +47,10 @@ using namespace bvh_build_detail;
 // megatriangle scene makes hundreds of tasks).
 constexpr std::uint32_t kTaskNode = 1u << 12;
 
-void check_options(const BvhBuildOptions& o) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("build_bvh: " + what); };
+}  // namespace
+
+void check_build_options(const BvhBuildOptions& o, const char* builder) {
+  auto fail = [builder](const std::string& what) { throw std::invalid_argument(std::string(builder) + ": " + what); };
   if (o.bins < 2 || o.bins > 256) fail("bins must be in [2, 256], got " + std::to_string(o.bins));
   if (o.max_leaf_size < 1) fail("max_leaf_size must be >= 1");
   if (o.min_leaf_size < 1 || o.min_leaf_size > o.max_leaf_size) fail("min_leaf_size must be in [1, max_leaf_size]");
@@ -58,6 +60,8 @@ void check_options(const BvhBuildOptions& o) {
     fail("leaf_block_width must be in [1, 64], got " + std::to_string(o.leaf_block_width));
   if (!(o.padding_cost >= 0.0f && o.padding_cost <= 1.0f)) fail("padding_cost must be in [0, 1]");
 }
+
+namespace {
 
 // Builds the subtree of one task depth first into its own node array: nodes[0] is the
 // task's node, child indices are local, leaves index the shared item array.
@@ -291,7 +295,7 @@ class Builder {
 }  // namespace
 
 Bvh build_bvh(std::span<const BBox> prim_boxes, const BvhBuildOptions& options) {
-  check_options(options);
+  check_build_options(options, "build_bvh");
   if (prim_boxes.size() >= std::numeric_limits<std::uint32_t>::max())
     throw std::length_error("build_bvh: more than 2^32 - 2 primitives");
   if (prim_boxes.empty()) return Bvh{};

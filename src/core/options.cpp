@@ -1,4 +1,4 @@
-// Names of triangle tests and ISAs, shared by the CLI, VOLLEY_ISA and reports.
+// Names of triangle tests, ISAs and build qualities, shared by the CLI, VOLLEY_ISA and reports.
 #include "volley/options.h"
 
 namespace volley {
@@ -21,6 +21,20 @@ std::string_view to_string(Isa isa) {
     case Isa::avx512: return "avx512";
   }
   return "?";
+}
+
+std::string_view to_string(BuildQuality quality) {
+  switch (quality) {
+    case BuildQuality::medium: return "medium";
+    case BuildQuality::high: return "high";
+  }
+  return "?";
+}
+
+std::optional<BuildQuality> parse_build_quality(std::string_view name) {
+  for (BuildQuality q : {BuildQuality::medium, BuildQuality::high})
+    if (name == to_string(q)) return q;
+  return std::nullopt;
 }
 
 std::optional<TriangleTest> parse_triangle_test(std::string_view name) {

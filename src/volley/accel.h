@@ -65,6 +65,8 @@ struct AccelInfo {
   Isa isa = Isa::scalar;           ///< ISA actually used
   bool robust = true;              ///< Options::robust: padded (conservative) slab tests
   bool reference_double = false;   ///< Options::reference_double: double-precision triangle tests
+  BuildQuality quality = BuildQuality::medium;  ///< Options::quality the BVH was built with
+  std::size_t references = 0;      ///< triangles stored in the leaves (more than the triangles with spatial splits)
 };
 
 /// Triangles and planar polygons, built once by commit(), then queried.

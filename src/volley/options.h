@@ -25,6 +25,14 @@ enum class Isa {
   avx512,     ///< AVX-512 (F, DQ, BW, VL): 16 lanes
 };
 
+/// How much work commit puts into the BVH (Embree's build qualities).
+enum class BuildQuality {
+  medium,  ///< binned SAH over the triangles' boxes: fast to build, the default
+  high,    ///< also spatial splits (SBVH): a triangle may be cut into several leaves' references;
+           ///< several times slower to build, fewer nodes per ray where triangles are long and
+           ///< overlap (perf/rays.md has the scenes where it pays and where it does not)
+};
+
 /// Options fixed at Accel::commit.
 struct Options {
   TriangleTest test = TriangleTest::watertight;  ///< ray/triangle test (and triangle layout)
@@ -46,6 +54,9 @@ struct Options {
   /// most once per geometry), or when the refit leaves the SAH cost more than
   /// kRefitRebuildGrowth times that of the last build. false: always build.
   bool refit = true;
+  /// BVH build quality. high applies to every ISA; answers are the same as with medium
+  /// (a triangle reached through several references is reported once).
+  BuildQuality quality = BuildQuality::medium;
 };
 
 /// SAH cost growth (after a refit, against the last full build) past which commit
@@ -60,5 +71,9 @@ VOLLEY_API std::string_view to_string(Isa isa);
 VOLLEY_API std::optional<TriangleTest> parse_triangle_test(std::string_view name);
 /// Parses a command-line name; std::nullopt for an unknown name.
 VOLLEY_API std::optional<Isa> parse_isa(std::string_view name);
+/// Names as used on the command line ("medium", "high").
+VOLLEY_API std::string_view to_string(BuildQuality quality);
+/// Parses a command-line name; std::nullopt for an unknown name.
+VOLLEY_API std::optional<BuildQuality> parse_build_quality(std::string_view name);
 
 }  // namespace volley

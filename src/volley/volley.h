@@ -95,6 +95,14 @@ typedef enum volley_isa {
   VOLLEY_ISA_AVX512 = 4  /**< AVX-512 F/DQ/BW/VL, 16 lanes */
 } volley_isa;
 
+/** BVH build quality, fixed at commit (same as volley::BuildQuality; the values are
+ *  Embree's RTC_BUILD_QUALITY_MEDIUM and _HIGH). */
+typedef enum volley_build_quality {
+  VOLLEY_BUILD_QUALITY_MEDIUM = 1, /**< binned SAH: fast to build (default) */
+  VOLLEY_BUILD_QUALITY_HIGH = 2    /**< also spatial splits (SBVH): slower to build, fewer nodes per ray where
+                                        triangles are long; the same answers */
+} volley_build_quality;
+
 /** One ray (32 bytes; the layout of volley::Ray and of a .vray record). */
 typedef struct volley_ray {
   float org[3]; /**< origin */
@@ -199,6 +207,8 @@ typedef struct volley_scene_info {
   size_t instances;          /**< instance geometries (volley_scene_add_instance) */
   size_t instanced_triangles; /**< triangles seen through the instances */
   double load_seconds;       /**< wall time of volley_scene_load (0 when built) */
+  volley_build_quality quality; /**< the build quality of the structure */
+  size_t references;         /**< triangles stored in the leaves (above triangles with spatial splits) */
 } volley_scene_info;
 
 /** A scene: triangles and polygons plus the acceleration structure built over them.
@@ -336,6 +346,7 @@ typedef struct volley_commit_options {
                                   accuracy reference); needs VOLLEY_ISA_SCALAR and robust; default 0 */
   int refit;                 /**< nonzero (default): after volley_scene_update_vertices with nothing else
                                   changed, refit the BVH instead of building it (volley::Options::refit) */
+  volley_build_quality quality; /**< default VOLLEY_BUILD_QUALITY_MEDIUM */
 } volley_commit_options;
 
 /** The defaults of volley_commit_options (those of volley_scene_commit). NULL is ignored. */
