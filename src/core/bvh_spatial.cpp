@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -35,6 +36,9 @@ constexpr int kSpatialBins = 32;
 // fraction of the root's area (Stich et al.'s alpha: nearly everywhere near the root,
 // rarely deep down where boxes are small).
 constexpr float kOverlapAlpha = 1e-5f;
+// Object bins per axis at most (BvhBuildOptions::bins' range).
+constexpr int kMaxBins = 256;
+static_assert(kSpatialBins <= kMaxBins);
 // Nodes of at least this many references build their children as parallel tasks.
 constexpr std::size_t kTaskRefs = 4096;
 
@@ -54,8 +58,21 @@ BBox intersection(const BBox& a, const BBox& b) {
   return r;
 }
 
-// Extends `box` by the double point p rounded outwards on every axis but `axis`, where
-// it is the plane `x` (a float, exactly).
+// The float next to finite f towards -inf (+inf with up): its bits one step on.
+float step(float f, bool up) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  if (f == 0.0f) bits = up ? 1u : 0x80000001u;  // the smallest subnormals
+  else if ((f > 0.0f) == up) ++bits;
+  else --bits;
+  std::memcpy(&f, &bits, 4);
+  return f;
+}
+
+// Extends `box` by the double point p, one float step beyond its nearest float on each
+// side, on every axis but `axis`, where it is the plane `x` (a float, exactly). p is within
+// a few double ulps of the exact point, far less than the half float step that the
+// nearest float may lie on the wrong side: the bounds hold the exact point.
 void extend_outwards(BBox& box, const double (&p)[3], int axis, float x) {
   for (int k = 0; k < 3; ++k) {
     if (k == axis) {
@@ -64,8 +81,8 @@ void extend_outwards(BBox& box, const double (&p)[3], int axis, float x) {
       continue;
     }
     const float f = static_cast<float>(p[k]);
-    box.lo[k] = std::min(box.lo[k], std::nextafter(f, -kInf));
-    box.hi[k] = std::max(box.hi[k], std::nextafter(f, kInf));
+    box.lo[k] = std::min(box.lo[k], step(f, false));
+    box.hi[k] = std::max(box.hi[k], step(f, true));
   }
 }
 
@@ -216,23 +233,24 @@ class SpatialBuilder {
   Choice object_choice(const std::vector<Ref>& refs, const BBox& cbox, BBox& lobj, BBox& robj) const {
     Choice best;
     const int nb = std::min<int>(opt_.bins, static_cast<int>(refs.size()));
+    float scale[3];
     for (int axis = 0; axis < 3; ++axis) {
       const float extent = cbox.hi[axis] - cbox.lo[axis];
-      if (!(extent > 0.0f)) continue;
-      const float scale = static_cast<float>(nb) / extent;
-      std::vector<BBox> bins(nb);
-      std::vector<std::size_t> counts(nb, 0);
-      for (const Ref& r : refs) {
-        const int b = object_bin(r, axis, cbox.lo[axis], scale, nb);
-        bins[b].extend(r.box);
-        ++counts[b];
-      }
-      sweep(bins, counts, counts, axis, false, best);
+      scale[axis] = extent > 0.0f ? static_cast<float>(nb) / extent : 0.0f;
     }
-    if (best.axis < 0) return best;
-    const float scale = static_cast<float>(nb) / (cbox.hi[best.axis] - cbox.lo[best.axis]);
+    // One pass over the references bins all three axes.
+    BBox bins[3][kMaxBins];
+    std::size_t counts[3][kMaxBins] = {};
     for (const Ref& r : refs)
-      (object_bin(r, best.axis, cbox.lo[best.axis], scale, nb) <= best.bin ? lobj : robj).extend(r.box);
+      for (int axis = 0; axis < 3; ++axis) {
+        const int b = object_bin(r, axis, cbox.lo[axis], scale[axis], nb);
+        bins[axis][b].extend(r.box);
+        ++counts[axis][b];
+      }
+    for (int axis = 0; axis < 3; ++axis)
+      if (scale[axis] > 0.0f) sweep(bins[axis], counts[axis], counts[axis], nb, axis, false, best);
+    if (best.axis < 0) return best;
+    for (int b = 0; b < nb; ++b) (b <= best.bin ? lobj : robj).extend(bins[best.axis][b]);
     return best;
   }
 
@@ -243,11 +261,10 @@ class SpatialBuilder {
 
   // The cheapest plane between bins: enter[b] references start in bin b, leave[b] end in it
   // (the same for object bins).
-  void sweep(const std::vector<BBox>& bins, const std::vector<std::size_t>& enter, const std::vector<std::size_t>& leave,
-             int axis, bool spatial, Choice& best) const {
-    const int nb = static_cast<int>(bins.size());
-    std::vector<float> left_area(nb);
-    std::vector<std::size_t> left_count(nb);
+  void sweep(const BBox* bins, const std::size_t* enter, const std::size_t* leave, int nb, int axis, bool spatial,
+             Choice& best) const {
+    float left_area[kMaxBins];
+    std::size_t left_count[kMaxBins];
     BBox acc;
     std::size_t n = 0;
     for (int b = 0; b < nb - 1; ++b) {
@@ -284,8 +301,8 @@ class SpatialBuilder {
     Choice best;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(box.hi[axis] > box.lo[axis])) continue;
-      std::vector<BBox> bins(kSpatialBins);
-      std::vector<std::size_t> enter(kSpatialBins, 0), leave(kSpatialBins, 0);
+      BBox bins[kSpatialBins];
+      std::size_t enter[kSpatialBins] = {}, leave[kSpatialBins] = {};
       for (const Ref& r : refs) {
         const int first = spatial_bin(box, axis, r.box.lo[axis]);
         const int last = spatial_bin(box, axis, r.box.hi[axis]);
@@ -295,13 +312,41 @@ class SpatialBuilder {
           bins[first].extend(r.box);
           continue;
         }
-        const glm::vec3* v = v_ + 3 * std::size_t{r.prim};
-        for (int b = first; b <= last; ++b)
-          bins[b].extend(clipped_box(v, axis, plane(box, axis, b), plane(box, axis, b + 1), r.box));
+        chop(v_ + 3 * std::size_t{r.prim}, r.box, box, axis, first, last, bins);
       }
-      sweep(bins, enter, leave, axis, true, best);
+      sweep(bins, enter, leave, kSpatialBins, axis, true, best);
     }
     return best;
+  }
+
+  // Extends bins[first .. last] of the grid over `node` by the parts of triangle v within
+  // `ref` that fall in them. Each part is bounded by the triangle's vertices in its bin and
+  // the points where the edges cross the bin's two planes; every plane's crossings are
+  // computed once, in float: the bins only price the split (spatial_partition cuts the
+  // references it makes conservatively).
+  static void chop(const glm::vec3* v, const BBox& ref, const BBox& node, int axis, int first, int last, BBox* bins) {
+    BBox at_plane[kSpatialBins + 1], parts[kSpatialBins];
+    for (int e = 0; e < 3; ++e) {
+      const glm::vec3& p = v[e];
+      const glm::vec3& q = v[e == 2 ? 0 : e + 1];
+      parts[std::clamp(spatial_bin(node, axis, p[axis]), first, last)].extend(p);
+      const float lo = std::min(p[axis], q[axis]), hi = std::max(p[axis], q[axis]);
+      if (!(lo < hi)) continue;
+      const int from = std::max(first + 1, spatial_bin(node, axis, lo)), to = std::min(last, spatial_bin(node, axis, hi) + 1);
+      for (int j = from; j <= to; ++j) {
+        const float x = plane(node, axis, j);
+        if (!(lo < x && x < hi)) continue;
+        glm::vec3 c = p + ((x - p[axis]) / (q[axis] - p[axis])) * (q - p);
+        c[axis] = x;
+        at_plane[j].extend(c);
+      }
+    }
+    for (int b = first; b <= last; ++b) {
+      BBox part = parts[b];
+      if (b > first) part.extend(at_plane[b]);
+      if (b < last) part.extend(at_plane[b + 1]);
+      bins[b].extend(intersection(part, ref));
+    }
   }
 
   // References wholly below the plane go left, wholly above right; a straddling one is cut
