@@ -506,6 +506,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.isa = static_cast<volley_isa>(in.ConsumeIntegralInRange(0, 5));
   options.robust = in.ConsumeIntegralInRange(0, 7) != 0;
   options.reference_double = in.ConsumeIntegralInRange(0, 7) == 0;
+  options.quality = static_cast<volley_build_quality>(in.ConsumeIntegralInRange(0, 3));  // 1 and 2 are valid
   const Geometry geometry = make_geometry(in);
   current = Case{&geometry, nullptr, int(options.test), int(options.isa), options.robust, options.reference_double};
 

@@ -151,6 +151,32 @@ def test_pickle_and_save_load_give_the_same_answers(tmp_path):
         pickle.dumps(loaded)
 
 
+def test_high_quality_gives_the_same_answers_and_pickles_with_its_quality():
+    # Long slivers across a box of small triangles: the spatial-split build cuts them.
+    rng = np.random.default_rng(5)
+    a, b = rng.uniform(-10, 10, (100, 3)), rng.uniform(-10, 10, (100, 3))
+    slivers = np.stack([a, b, (a + b) / 2 + rng.uniform(-0.5, 0.5, (100, 3))], axis=1).reshape(-1, 3)
+    centres = rng.uniform(-10, 10, (400, 1, 3))
+    dust = (centres + rng.uniform(-0.5, 0.5, (400, 3, 3))).reshape(-1, 3)
+    vertices = np.concatenate([slivers, dust]).astype(np.float32)
+    triangles = np.arange(len(vertices), dtype=np.uint32).reshape(-1, 3)
+    medium, high = volley.RaycastingScene(), volley.RaycastingScene(quality="high")
+    for s in (medium, high):
+        s.add_triangles(vertices, triangles)
+    rays = np.concatenate([rng.uniform(-15, 15, (3000, 3)), rng.uniform(-1, 1, (3000, 3))], axis=1).astype(np.float32)
+    want, got = medium.cast_rays(rays), high.cast_rays(rays)
+    for k in ("t_hit", "geometry_ids", "primitive_ids", "primitive_uvs", "primitive_normals"):
+        np.testing.assert_array_equal(got[k], want[k])
+    np.testing.assert_array_equal(high.count_intersections(rays), medium.count_intersections(rays))
+    info = high.info()
+    assert info["quality"] == "high" and info["references"] > len(triangles)
+    assert medium.info()["quality"] == "medium"
+    back = pickle.loads(pickle.dumps(high))
+    assert back.info()["quality"] == "high"
+    with pytest.raises(ValueError, match="quality"):
+        volley.RaycastingScene(quality="low")
+
+
 def write_vray(path, rays):
     with open(path, "wb") as f:
         f.write(b"VRAY" + struct.pack("<IQ", 1, len(rays)))

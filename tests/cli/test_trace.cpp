@@ -286,6 +286,28 @@ TEST_CASE("trace and rays: bad input gives a clear message and a non-zero exit")
   CHECK(has(r.output, "no light"));
 }
 
+TEST_CASE("trace --quality high: the same hit and crossing files as medium, info names it, a bad name is refused") {
+  const std::string scene = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
+  const fs::path rays = temp_path("quality.vray");
+  REQUIRE(run("rays " + scene + " --workload diffuse --width 40 --height 30 -o " + rays.string()).status == 0);
+  for (const std::string query : {"", " --occluded", " --count"}) {
+    CAPTURE(query);
+    const fs::path medium = temp_path("medium.out"), high = temp_path("high.out");
+    REQUIRE(run("trace " + scene + " --rays " + rays.string() + query + " --reps 1 -o " + medium.string()).status == 0);
+    REQUIRE(run("trace " + scene + " --rays " + rays.string() + query + " --reps 1 --quality high -o " +
+                high.string()).status == 0);
+    CHECK(bytes_of(medium) == bytes_of(high));
+  }
+  Run r = run("info " + scene + " --quality high");
+  REQUIRE(r.status == 0);
+  CHECK(has(r.output, "high quality"));
+  CHECK(has(r.output, "triangle references in the leaves"));
+  r = run("trace " + scene + " --rays " + rays.string() + " --quality low");
+  CHECK(r.status != 0);
+  CHECK(r.status < 128);
+  CHECK(has(r.output, "--quality"));
+}
+
 TEST_CASE("trace --save / --load: the loaded structure gives the same hit file, a wrong file is named") {
   const fs::path rays = temp_path("saveload.vray"), saved = temp_path("cornell.vacc");
   const fs::path built_hits = temp_path("built.vhit"), loaded_hits = temp_path("loaded.vhit");

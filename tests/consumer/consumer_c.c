@@ -263,6 +263,18 @@ static void check_validation(void) {
   options.isa = VOLLEY_ISA_SCALAR, options.robust = 0;
   expect(volley_scene_commit_ex(scene, &options), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
   expect(volley_scene_get_info(scene, &info), VOLLEY_ERROR_NOT_COMMITTED, "volley_scene_get_info");
+  volley_commit_options_default(&options);
+  check(options.quality == VOLLEY_BUILD_QUALITY_MEDIUM, "medium quality is the default", (int)options.quality);
+  options.quality = (volley_build_quality)0; /* Embree's LOW: not offered */
+  expect(volley_scene_commit_ex(scene, &options), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
+  check(strstr(volley_last_error(), "build quality") != NULL, "the message names the build quality", 0);
+  options.quality = (volley_build_quality)3;
+  expect(volley_scene_commit_ex(scene, &options), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_commit_ex");
+  options.quality = VOLLEY_BUILD_QUALITY_HIGH;
+  expect(volley_scene_commit_ex(scene, &options), VOLLEY_OK, "volley_scene_commit_ex");
+  expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
+  check(info.quality == VOLLEY_BUILD_QUALITY_HIGH && info.references >= 2, "info reports the quality and references",
+        (int)info.quality);
   expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
   expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
   check(info.triangles == 2, "two triangles", (int)info.triangles);
@@ -417,6 +429,13 @@ int main(void) {
         options.test = tests[t], options.isa = isas[i], options.robust = robust;
         check_scene(&options);
       }
+  /* Spatial splits (the same answers). */
+  for (t = 0; t < 3; ++t)
+    for (i = 0; i < 5; ++i) {
+      volley_commit_options_default(&options);
+      options.test = tests[t], options.isa = isas[i], options.quality = VOLLEY_BUILD_QUALITY_HIGH;
+      check_scene(&options);
+    }
   /* The double-precision reference (scalar oracle). */
   for (t = 0; t < 3; ++t) {
     volley_commit_options_default(&options);
