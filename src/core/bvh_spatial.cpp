@@ -36,6 +36,10 @@ constexpr int kSpatialBins = 32;
 // fraction of the root's area (Stich et al.'s alpha: nearly everywhere near the root,
 // rarely deep down where boxes are small).
 constexpr float kOverlapAlpha = 1e-5f;
+// Nodes of at most kSmallNode references get kSmallNodeSpatialBins (they are most of the
+// nodes, and the references of a small node span many of its bins).
+constexpr std::size_t kSmallNode = 64;
+constexpr int kSmallNodeSpatialBins = 8;
 // Object bins per axis at most (BvhBuildOptions::bins' range).
 constexpr int kMaxBins = 256;
 static_assert(kSpatialBins <= kMaxBins);
@@ -285,56 +289,65 @@ class SpatialBuilder {
     }
   }
 
-  // The plane after bin b of the spatial grid over `box` on `axis`.
-  static float plane(const BBox& box, int axis, int b) {
-    if (b >= kSpatialBins) return box.hi[axis];
-    return box.lo[axis] + (box.hi[axis] - box.lo[axis]) * (static_cast<float>(b) / kSpatialBins);
-  }
-  static int spatial_bin(const BBox& box, int axis, float x) {
-    const float extent = box.hi[axis] - box.lo[axis];
-    const int b = static_cast<int>((x - box.lo[axis]) * (kSpatialBins / extent));
-    return std::clamp(b, 0, kSpatialBins - 1);
+  // The spatial bins of a node: `nb` slabs of equal width over its box on each axis.
+  struct Grid {
+    BBox box;
+    int nb;
+    // The plane after bin b on `axis` (b = nb: the box's upper face).
+    float plane(int axis, int b) const {
+      if (b >= nb) return box.hi[axis];
+      return box.lo[axis] + (box.hi[axis] - box.lo[axis]) * (static_cast<float>(b) / static_cast<float>(nb));
+    }
+    int bin(int axis, float x) const {
+      const float extent = box.hi[axis] - box.lo[axis];
+      const int b = static_cast<int>((x - box.lo[axis]) * (static_cast<float>(nb) / extent));
+      return std::clamp(b, 0, nb - 1);
+    }
+  };
+  Grid grid_of(const BBox& box, std::size_t count) const {
+    return {box, count <= kSmallNode ? kSmallNodeSpatialBins : kSpatialBins};
   }
 
   // Binned spatial split: each reference chopped into the bins it spans.
   Choice spatial_choice(const std::vector<Ref>& refs, const BBox& box) const {
     Choice best;
+    const Grid grid = grid_of(box, refs.size());
     for (int axis = 0; axis < 3; ++axis) {
       if (!(box.hi[axis] > box.lo[axis])) continue;
       BBox bins[kSpatialBins];
       std::size_t enter[kSpatialBins] = {}, leave[kSpatialBins] = {};
       for (const Ref& r : refs) {
-        const int first = spatial_bin(box, axis, r.box.lo[axis]);
-        const int last = spatial_bin(box, axis, r.box.hi[axis]);
+        const int first = grid.bin(axis, r.box.lo[axis]);
+        const int last = grid.bin(axis, r.box.hi[axis]);
         ++enter[first];
         ++leave[last];
         if (first == last) {
           bins[first].extend(r.box);
           continue;
         }
-        chop(v_ + 3 * std::size_t{r.prim}, r.box, box, axis, first, last, bins);
+        chop(v_ + 3 * std::size_t{r.prim}, r.box, grid, axis, first, last, bins);
       }
-      sweep(bins, enter, leave, kSpatialBins, axis, true, best);
+      sweep(bins, enter, leave, grid.nb, axis, true, best);
     }
     return best;
   }
 
-  // Extends bins[first .. last] of the grid over `node` by the parts of triangle v within
-  // `ref` that fall in them. Each part is bounded by the triangle's vertices in its bin and
-  // the points where the edges cross the bin's two planes; every plane's crossings are
-  // computed once, in float: the bins only price the split (spatial_partition cuts the
-  // references it makes conservatively).
-  static void chop(const glm::vec3* v, const BBox& ref, const BBox& node, int axis, int first, int last, BBox* bins) {
+  // Extends bins[first .. last] of `grid` by the parts of triangle v within `ref` that
+  // fall in them. Each part is bounded by the triangle's vertices in its bin and the points
+  // where the edges cross the bin's two planes; every plane's crossings are computed once,
+  // in float: the bins only price the split (spatial_partition cuts the references it makes
+  // conservatively).
+  static void chop(const glm::vec3* v, const BBox& ref, const Grid& grid, int axis, int first, int last, BBox* bins) {
     BBox at_plane[kSpatialBins + 1], parts[kSpatialBins];
     for (int e = 0; e < 3; ++e) {
       const glm::vec3& p = v[e];
       const glm::vec3& q = v[e == 2 ? 0 : e + 1];
-      parts[std::clamp(spatial_bin(node, axis, p[axis]), first, last)].extend(p);
+      parts[std::clamp(grid.bin(axis, p[axis]), first, last)].extend(p);
       const float lo = std::min(p[axis], q[axis]), hi = std::max(p[axis], q[axis]);
       if (!(lo < hi)) continue;
-      const int from = std::max(first + 1, spatial_bin(node, axis, lo)), to = std::min(last, spatial_bin(node, axis, hi) + 1);
+      const int from = std::max(first + 1, grid.bin(axis, lo)), to = std::min(last, grid.bin(axis, hi) + 1);
       for (int j = from; j <= to; ++j) {
-        const float x = plane(node, axis, j);
+        const float x = grid.plane(axis, j);
         if (!(lo < x && x < hi)) continue;
         glm::vec3 c = p + ((x - p[axis]) / (q[axis] - p[axis])) * (q - p);
         c[axis] = x;
@@ -354,12 +367,13 @@ class SpatialBuilder {
   void spatial_partition(const std::vector<Ref>& refs, const BBox& box, const Choice& c, std::vector<Ref>& left,
                          std::vector<Ref>& right) const {
     const int axis = c.axis;
-    const float x = plane(box, axis, c.bin + 1);
+    const Grid grid = grid_of(box, refs.size());
+    const float x = grid.plane(axis, c.bin + 1);
     BBox lbox, rbox;
     std::vector<const Ref*> straddling;
     for (const Ref& r : refs) {
-      const int first = spatial_bin(box, axis, r.box.lo[axis]);
-      const int last = spatial_bin(box, axis, r.box.hi[axis]);
+      const int first = grid.bin(axis, r.box.lo[axis]);
+      const int last = grid.bin(axis, r.box.hi[axis]);
       if (last <= c.bin) {
         left.push_back(r), lbox.extend(r.box);
       } else if (first > c.bin) {
