@@ -109,6 +109,13 @@ BBox clipped_box(const glm::vec3* v, int axis, float lo, float hi, const BBox& c
   return intersection(box, clip);
 }
 
+// Bin f (a position in bin units) of nb, clamped; NaN (0 * inf of a tiny extent) and
+// below 0 give 0, so that no float outside int's range is converted.
+int bin_of(float f, int nb) {
+  if (!(f > 0.0f)) return 0;
+  return f < static_cast<float>(nb) ? static_cast<int>(f) : nb - 1;
+}
+
 // ceil(log2(n)) for n >= 1.
 int ceil_log2(std::size_t n) {
   int k = 0;
@@ -236,7 +243,7 @@ class SpatialBuilder {
   // Binned SAH over the references' centroids; lobj and robj: the best split's children.
   Choice object_choice(const std::vector<Ref>& refs, const BBox& cbox, BBox& lobj, BBox& robj) const {
     Choice best;
-    const int nb = std::min<int>(opt_.bins, static_cast<int>(refs.size()));
+    const int nb = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(opt_.bins), refs.size()));
     float scale[3];
     for (int axis = 0; axis < 3; ++axis) {
       const float extent = cbox.hi[axis] - cbox.lo[axis];
@@ -259,8 +266,7 @@ class SpatialBuilder {
   }
 
   static int object_bin(const Ref& r, int axis, float lo, float scale, int nb) {
-    const int b = static_cast<int>((r.box.center()[axis] - lo) * scale);
-    return std::clamp(b, 0, nb - 1);
+    return bin_of((r.box.center()[axis] - lo) * scale, nb);
   }
 
   // The cheapest plane between bins: enter[b] references start in bin b, leave[b] end in it
@@ -300,8 +306,7 @@ class SpatialBuilder {
     }
     int bin(int axis, float x) const {
       const float extent = box.hi[axis] - box.lo[axis];
-      const int b = static_cast<int>((x - box.lo[axis]) * (static_cast<float>(nb) / extent));
-      return std::clamp(b, 0, nb - 1);
+      return bin_of((x - box.lo[axis]) * (static_cast<float>(nb) / extent), nb);
     }
   };
   Grid grid_of(const BBox& box, std::size_t count) const {
@@ -410,7 +415,7 @@ class SpatialBuilder {
 
   void object_partition(const std::vector<Ref>& refs, const BBox& cbox, const Choice& c, std::vector<Ref>& left,
                         std::vector<Ref>& right) const {
-    const int nb = std::min<int>(opt_.bins, static_cast<int>(refs.size()));
+    const int nb = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(opt_.bins), refs.size()));
     const float scale = static_cast<float>(nb) / (cbox.hi[c.axis] - cbox.lo[c.axis]);
     for (const Ref& r : refs) (object_bin(r, c.axis, cbox.lo[c.axis], scale, nb) <= c.bin ? left : right).push_back(r);
   }

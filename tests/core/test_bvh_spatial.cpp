@@ -151,3 +151,36 @@ TEST_CASE("bvh spatial: bad options and budgets are rejected, no triangles give 
   CHECK(volley::core::build_bvh_spatial(none, t.v.data()).nodes.empty());
   CHECK(volley::core::build_bvh_spatial({}, nullptr).nodes.empty());
 }
+
+TEST_CASE("bvh spatial: extreme coordinates (huge, tiny, flat, at one point) build and stay covered") {
+  Triangles t;
+  auto add = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    t.v.insert(t.v.end(), {a, b, c});
+    BBox box;
+    box.extend(a), box.extend(b), box.extend(c);
+    t.boxes.push_back(box);
+  };
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int i = 0; i < 400; ++i) {
+    const float scale = i % 4 == 0 ? 1e37f : i % 4 == 1 ? 1e-36f : i % 4 == 2 ? 1.0f : 0.0f;
+    const glm::vec3 a(unit(rng), unit(rng), unit(rng)), b(unit(rng), unit(rng), unit(rng));
+    // Long slivers at every scale, flat in z for some, and all three vertices at one point for scale 0.
+    add(scale * a, scale * b, scale * (0.5f * (a + b) + glm::vec3(0.01f * unit(rng), 0.01f * unit(rng), 0.0f)));
+    add(scale * glm::vec3(a.x, a.y, 0), scale * glm::vec3(b.x, b.y, 0), scale * glm::vec3(a.x, b.y, 0));
+  }
+  const Bvh bvh = volley::core::build_bvh_spatial(t.boxes, t.v.data(), wide_options());
+  REQUIRE(!bvh.nodes.empty());
+  std::vector<std::vector<BBox>> leaf_boxes(t.boxes.size());
+  for (const BvhNode& n : bvh.nodes)
+    if (n.is_leaf())
+      for (std::uint32_t k = 0; k < n.count; ++k) leaf_boxes[bvh.prim_index[n.first_or_child + k]].push_back(n.box);
+  std::size_t uncovered = 0;
+  for (std::size_t i = 0; i < t.boxes.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      bool inside = false;
+      for (const BBox& box : leaf_boxes[i]) inside = inside || box.contains(t.v[3 * i + k]);
+      uncovered += !inside;  // every vertex in one of its triangle's leaves, exactly
+    }
+  CHECK(uncovered == 0);
+}
