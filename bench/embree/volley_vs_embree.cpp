@@ -240,8 +240,9 @@ int run(const Args& a) {
   std::printf("embree %d.%d.%d: build quality %s, scene flags %s, context %s, built in %.3f s\n", RTC_VERSION_MAJOR,
               RTC_VERSION_MINOR, RTC_VERSION_PATCH, to_string(config.quality), config.robust ? "ROBUST" : "NONE",
               a.coherent ? "COHERENT" : "INCOHERENT", embree.build_seconds());
-  std::printf("volley: test %s, isa %s, %.1f bytes/triangle, SAH cost %.2f, built in %.3f s\n",
+  std::printf("volley: test %s, isa %s, build quality %s, %.1f bytes/triangle, SAH cost %.2f, built in %.3f s\n",
               std::string(to_string(info.test)).c_str(), std::string(to_string(info.isa)).c_str(),
+              std::string(to_string(info.quality)).c_str(),
               double(info.bytes) / double(std::max<std::size_t>(1, info.triangles)), info.sah_cost,
               info.build_seconds);
 
@@ -293,7 +294,7 @@ int run(const Args& a) {
         << ",\n  \"embree\": {\"version\": \"" << RTC_VERSION_STRING << "\", \"quality\": \"" << to_string(config.quality)
         << "\", \"robust\": " << (config.robust ? "true" : "false") << ", \"build_s\": " << embree.build_seconds()
         << "},\n  \"volley\": {\"test\": \"" << to_string(info.test) << "\", \"isa\": \"" << to_string(info.isa)
-        << "\", \"build_s\": " << info.build_seconds << "},\n  \"modes\": [\n";
+        << "\", \"quality\": \"" << to_string(info.quality) << "\", \"build_s\": " << info.build_seconds << "},\n  \"modes\": [\n";
     for (std::size_t i = 0; i < results.size(); ++i) {
       const Result& r = results[i];
       out << "    {\"mode\": \"" << r.mode->name << "\", \"embree_call\": \"" << r.mode->embree_call
