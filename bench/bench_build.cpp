@@ -2,7 +2,8 @@
 // scene's merged triangle mesh, per scene x ISA, on one thread (a oneTBB global_control
 // limits the parallel parts of the build to the calling thread, so the figure does not
 // depend on what else the machine runs); build/<scene>/avx512/2threads allows two, for
-// the parallel build's scaling (the tree is the same for any thread count).
+// the parallel build's scaling (the tree is the same for any thread count), and
+// build/<scene>/avx512/high is the spatial-split build (BuildQuality::high) on one thread.
 //
 // The ISA decides the structure: scalar builds the oracle's binary SAH BVH, a SIMD ISA
 // the wide BVH with triangle blocks of its lane count (test: watertight). Items processed
@@ -21,7 +22,8 @@
 namespace volley::bench {
 namespace {
 
-void build(benchmark::State& state, const std::string& scene, Isa isa, int threads) {
+void build(benchmark::State& state, const std::string& scene, Isa isa, int threads,
+           BuildQuality quality = BuildQuality::medium) {
   state.SetLabel(std::string(volley::to_string(isa)));
   const io::SceneDesc* desc = nullptr;
   try {
@@ -38,7 +40,9 @@ void build(benchmark::State& state, const std::string& scene, Isa isa, int threa
     for (std::size_t k = 0; k <= extra_builds; ++k) {
       Accel accel;
       accel.add_triangles(&mesh.positions[0].x, mesh.positions.size(), mesh.indices.data(), mesh.triangle_count());
-      accel.commit(Options{TriangleTest::watertight, isa});
+      Options options{TriangleTest::watertight, isa};
+      options.quality = quality;
+      accel.commit(options);
       benchmark::DoNotOptimize(accel);
       if (k == 0) info = accel.info();
     }
@@ -59,11 +63,15 @@ const bool registered = [] {
       benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) {
         build(st, scene, isa, 1);
       })->Unit(benchmark::kMillisecond);
-      if (isa == Isa::avx512)
+      if (isa == Isa::avx512) {
         benchmark::RegisterBenchmark((name + "/2threads").c_str(),
                                      [=](benchmark::State& st) { build(st, scene, isa, 2); })
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
+        benchmark::RegisterBenchmark((name + "/high").c_str(),
+                                     [=](benchmark::State& st) { build(st, scene, isa, 1, BuildQuality::high); })
+            ->Unit(benchmark::kMillisecond);
+      }
     }
   }
   return true;
