@@ -343,28 +343,32 @@ class SpatialBuilder {
   // in float: the bins only price the split (spatial_partition cuts the references it makes
   // conservatively).
   static void chop(const glm::vec3* v, const BBox& ref, const Grid& grid, int axis, int first, int last, BBox* bins) {
-    BBox at_plane[kSpatialBins + 1], parts[kSpatialBins];
+    int vertex_bin[3];
+    for (int k = 0; k < 3; ++k) vertex_bin[k] = std::clamp(grid.bin(axis, v[k][axis]), first, last);
+    BBox below;  // the crossings of the plane below bin b (none below the first)
+    for (int b = first; b <= last; ++b) {
+      const BBox above = b < last ? crossings(v, axis, grid.plane(axis, b + 1)) : BBox{};
+      BBox part = below;
+      part.extend(above);
+      for (int k = 0; k < 3; ++k)
+        if (vertex_bin[k] == b) part.extend(v[k]);
+      bins[b].extend(intersection(part, ref));
+      below = above;
+    }
+  }
+
+  // Bounds of the points where the edges of triangle v cross the plane x_axis = x.
+  static BBox crossings(const glm::vec3* v, int axis, float x) {
+    BBox box;
     for (int e = 0; e < 3; ++e) {
       const glm::vec3& p = v[e];
       const glm::vec3& q = v[e == 2 ? 0 : e + 1];
-      parts[std::clamp(grid.bin(axis, p[axis]), first, last)].extend(p);
-      const float lo = std::min(p[axis], q[axis]), hi = std::max(p[axis], q[axis]);
-      if (!(lo < hi)) continue;
-      const int from = std::max(first + 1, grid.bin(axis, lo)), to = std::min(last, grid.bin(axis, hi) + 1);
-      for (int j = from; j <= to; ++j) {
-        const float x = grid.plane(axis, j);
-        if (!(lo < x && x < hi)) continue;
-        glm::vec3 c = p + ((x - p[axis]) / (q[axis] - p[axis])) * (q - p);
-        c[axis] = x;
-        at_plane[j].extend(c);
-      }
+      if (!((p[axis] < x && x < q[axis]) || (q[axis] < x && x < p[axis]))) continue;
+      glm::vec3 c = p + ((x - p[axis]) / (q[axis] - p[axis])) * (q - p);
+      c[axis] = x;
+      box.extend(c);
     }
-    for (int b = first; b <= last; ++b) {
-      BBox part = parts[b];
-      if (b > first) part.extend(at_plane[b]);
-      if (b < last) part.extend(at_plane[b + 1]);
-      bins[b].extend(intersection(part, ref));
-    }
+    return box;
   }
 
   // References wholly below the plane go left, wholly above right; a straddling one is cut
