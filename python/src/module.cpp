@@ -63,7 +63,7 @@ release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
            py::arg("isa") = "auto", py::arg("quality") = "medium",
            "test: 'watertight' (default), 'moller' or 'plane'; isa: 'auto', 'scalar', 'sse4.2', 'avx2', 'avx512'; "
            "quality: 'medium' (binned SAH, default) or 'high' (also spatial splits: slower to build, faster rays "
-           "where triangles are long; the same answers)")
+           "where triangles are long; medium's answers but for ties that rounding decides)")
       .def("add_triangles", &RaycastingScene::add_triangles, py::arg("vertices"), py::arg("triangles"),
            "Adds a mesh: vertices (N, 3), triangles (M, 3) vertex indices. Returns its geometry id.")
       .def("add_instance", &RaycastingScene::add_instance, py::arg("prototype"), py::arg("transform"),

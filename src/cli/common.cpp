@@ -16,7 +16,7 @@ void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
       ->capture_default_str();
   cmd.add_option("--quality", args.quality,
                  "BVH build quality: medium (binned SAH) or high (also spatial splits: a slower build, faster "
-                 "rays where triangles are long, e.g. Sponza; the same answers)")
+                 "rays where triangles are long, e.g. Sponza; medium's answers but for ties that rounding decides)")
       ->check(CLI::IsMember({"medium", "high"}))
       ->capture_default_str();
   CLI::Option* fast = cmd.add_flag("--fast-slabs", args.fast_slabs,

@@ -54,8 +54,10 @@ struct Options {
   /// most once per geometry), or when the refit leaves the SAH cost more than
   /// kRefitRebuildGrowth times that of the last build. false: always build.
   bool refit = true;
-  /// BVH build quality. high applies to every ISA; answers are the same as with medium
-  /// (a triangle reached through several references is reported once).
+  /// BVH build quality. high applies to every ISA; answers are medium's (a triangle reached
+  /// through several references is reported once) but where float rounding decides: a tie
+  /// between two triangles at one t, or a hit at t near 0 on the ray's own start triangle,
+  /// may come out the other way (a few rays in 100,000 of the diffuse workloads; perf/rays.md).
   BuildQuality quality = BuildQuality::medium;
 };
 

@@ -100,7 +100,7 @@ typedef enum volley_isa {
 typedef enum volley_build_quality {
   VOLLEY_BUILD_QUALITY_MEDIUM = 1, /**< binned SAH: fast to build (default) */
   VOLLEY_BUILD_QUALITY_HIGH = 2    /**< also spatial splits (SBVH): slower to build, fewer nodes per ray where
-                                        triangles are long; the same answers */
+                                        triangles are long; medium's answers but where rounding decides (ties) */
 } volley_build_quality;
 
 /** One ray (32 bytes; the layout of volley::Ray and of a .vray record). */
