@@ -13,6 +13,8 @@ void expect(volley_status status, volley_status expected, const char* function);
 volley_scene* make_scene(void);
 
 /* consumer_c_scene_model.c */
+void check_geometries(void);
+void check_refit(void);
 void check_save_load(void);
 void check_masks(void);
 void check_instances(void);
