@@ -45,7 +45,23 @@ struct BvhBuildOptions {
   /// last block (ceil(N / w) * w - N), so that leaves fill their blocks.
   int leaf_block_width = 1;
   float padding_cost = 1.0f;  ///< cost of an empty block slot, in primitive tests, in [0, 1]
+
+  /// Test cost of n primitives in leaf blocks of leaf_block_width, in primitive tests: n plus
+  /// padding_cost per empty slot of the last block.
+  float leaf_slots(std::size_t n) const {
+    const auto w = static_cast<std::size_t>(leaf_block_width);
+    const std::size_t padded = (n + w - 1) / w * w;
+    return static_cast<float>(n) + padding_cost * static_cast<float>(padded - n);
+  }
 };
+
+/// Whether a node of `count` primitives at `depth` must take median splits from now on so
+/// that every leaf stays above kBvhMaxDepth (they need ceil(log2(count)) more levels at most).
+inline bool near_depth_limit(std::uint32_t depth, std::size_t count) {
+  int levels = 0;
+  while ((std::size_t{1} << levels) < count) ++levels;
+  return static_cast<int>(depth) + levels + 1 >= kBvhMaxDepth;
+}
 
 /// Builds a binary BVH over the given primitive boxes with the binned SAH of Wald,
 /// "On fast construction of SAH-based bounding volume hierarchies" (RT 2007): centroids

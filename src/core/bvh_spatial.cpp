@@ -16,7 +16,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -25,6 +24,7 @@
 #include <vector>
 
 #include "core/bvh.h"
+#include "core/triangle_clip.h"
 
 namespace volley::core {
 namespace {
@@ -53,74 +53,11 @@ struct Ref {
 
 float area(const BBox& b) { return b.half_area(); }
 
-BBox intersection(const BBox& a, const BBox& b) {
-  BBox r;
-  for (int k = 0; k < 3; ++k) {
-    r.lo[k] = std::max(a.lo[k], b.lo[k]);
-    r.hi[k] = std::min(a.hi[k], b.hi[k]);
-  }
-  return r;
-}
-
-// The float next to finite f towards -inf (+inf with up): its bits one step on.
-float step(float f, bool up) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, 4);
-  if (f == 0.0f) bits = up ? 1u : 0x80000001u;  // the smallest subnormals
-  else if ((f > 0.0f) == up) ++bits;
-  else --bits;
-  std::memcpy(&f, &bits, 4);
-  return f;
-}
-
-// Extends `box` by the double point p, one float step beyond its nearest float on each
-// side, on every axis but `axis`, where it is the plane `x` (a float, exactly). p is within
-// a few double ulps of the exact point, far less than the half float step that the
-// nearest float may lie on the wrong side: the bounds hold the exact point.
-void extend_outwards(BBox& box, const double (&p)[3], int axis, float x) {
-  for (int k = 0; k < 3; ++k) {
-    if (k == axis) {
-      box.lo[k] = std::min(box.lo[k], x);
-      box.hi[k] = std::max(box.hi[k], x);
-      continue;
-    }
-    const float f = static_cast<float>(p[k]);
-    box.lo[k] = std::min(box.lo[k], step(f, false));
-    box.hi[k] = std::max(box.hi[k], step(f, true));
-  }
-}
-
-// Bounds of the part of triangle `v` with lo <= x_axis <= hi, within `clip` (empty when the
-// part is).
-BBox clipped_box(const glm::vec3* v, int axis, float lo, float hi, const BBox& clip) {
-  BBox box;
-  for (int e = 0; e < 3; ++e) {
-    const glm::vec3& p = v[e];
-    const glm::vec3& q = v[e == 2 ? 0 : e + 1];
-    if (p[axis] >= lo && p[axis] <= hi) box.extend(p);
-    for (const float x : {lo, hi}) {
-      if (!((p[axis] < x && q[axis] > x) || (p[axis] > x && q[axis] < x))) continue;
-      const double t = (double(x) - p[axis]) / (double(q[axis]) - p[axis]);
-      const double point[3] = {p.x + t * (double(q.x) - p.x), p.y + t * (double(q.y) - p.y),
-                               p.z + t * (double(q.z) - p.z)};
-      extend_outwards(box, point, axis, x);
-    }
-  }
-  return intersection(box, clip);
-}
-
 // Bin f (a position in bin units) of nb, clamped; NaN (0 * inf of a tiny extent) and
 // below 0 give 0, so that no float outside int's range is converted.
 int bin_of(float f, int nb) {
   if (!(f > 0.0f)) return 0;
   return f < static_cast<float>(nb) ? static_cast<int>(f) : nb - 1;
-}
-
-// ceil(log2(n)) for n >= 1.
-int ceil_log2(std::size_t n) {
-  int k = 0;
-  while ((std::size_t{1} << k) < n) ++k;
-  return k;
 }
 
 // A subtree built by one task: nodes[0] is its root, child indices local; its leaves'
@@ -152,11 +89,7 @@ class SpatialBuilder {
     bool spatial = false;
   };
 
-  float slots(std::size_t n) const {
-    const std::size_t w = static_cast<std::size_t>(opt_.leaf_block_width);
-    const std::size_t padded = (n + w - 1) / w * w;
-    return static_cast<float>(n) + opt_.padding_cost * static_cast<float>(padded - n);
-  }
+  float slots(std::size_t n) const { return opt_.leaf_slots(n); }
 
   // The budget of added references is shared by the children in proportion to their
   // sizes, so that it never depends on which task runs first.
@@ -204,7 +137,7 @@ class SpatialBuilder {
     const std::size_t count = refs.size();
     if (count <= static_cast<std::size_t>(opt_.min_leaf_size)) return false;
     const bool forced = count > static_cast<std::size_t>(opt_.max_leaf_size);
-    if (static_cast<int>(depth) + ceil_log2(count) + 1 >= kBvhMaxDepth) {
+    if (near_depth_limit(depth, count)) {
       if (!forced) return false;
       return median(refs, left, right);
     }
@@ -213,7 +146,7 @@ class SpatialBuilder {
     BBox lobj, robj;
     const Choice best_object = object_choice(refs, cbox, lobj, robj);
     Choice best = best_object;
-    if (best.axis >= 0 && budget > 0 && area(intersection(lobj, robj)) > kOverlapAlpha * root_area_) {
+    if (best.axis >= 0 && budget > 0 && area(box_intersection(lobj, robj)) > kOverlapAlpha * root_area_) {
       const Choice s = spatial_choice(refs, box);
       if (s.cost < best.cost) best = s;
     }
@@ -347,28 +280,14 @@ class SpatialBuilder {
     for (int k = 0; k < 3; ++k) vertex_bin[k] = std::clamp(grid.bin(axis, v[k][axis]), first, last);
     BBox below;  // the crossings of the plane below bin b (none below the first)
     for (int b = first; b <= last; ++b) {
-      const BBox above = b < last ? crossings(v, axis, grid.plane(axis, b + 1)) : BBox{};
+      const BBox above = b < last ? plane_crossings(v, axis, grid.plane(axis, b + 1)) : BBox{};
       BBox part = below;
       part.extend(above);
       for (int k = 0; k < 3; ++k)
         if (vertex_bin[k] == b) part.extend(v[k]);
-      bins[b].extend(intersection(part, ref));
+      bins[b].extend(box_intersection(part, ref));
       below = above;
     }
-  }
-
-  // Bounds of the points where the edges of triangle v cross the plane x_axis = x.
-  static BBox crossings(const glm::vec3* v, int axis, float x) {
-    BBox box;
-    for (int e = 0; e < 3; ++e) {
-      const glm::vec3& p = v[e];
-      const glm::vec3& q = v[e == 2 ? 0 : e + 1];
-      if (!((p[axis] < x && x < q[axis]) || (q[axis] < x && x < p[axis]))) continue;
-      glm::vec3 c = p + ((x - p[axis]) / (q[axis] - p[axis])) * (q - p);
-      c[axis] = x;
-      box.extend(c);
-    }
-    return box;
   }
 
   // References wholly below the plane go left, wholly above right; a straddling one is cut
@@ -393,8 +312,8 @@ class SpatialBuilder {
     }
     for (const Ref* r : straddling) {
       const glm::vec3* v = v_ + 3 * std::size_t{r->prim};
-      const BBox lpart = clipped_box(v, axis, -kInf, x, r->box);
-      const BBox rpart = clipped_box(v, axis, x, kInf, r->box);
+      const BBox lpart = clipped_triangle_box(v, axis, -kInf, x, r->box);
+      const BBox rpart = clipped_triangle_box(v, axis, x, kInf, r->box);
       if (lpart.empty() || rpart.empty()) {
         (lpart.empty() ? right : left).push_back(*r);
         (lpart.empty() ? rbox : lbox).extend(r->box);

@@ -46,13 +46,6 @@ struct Split {
   BBox lcbox, rcbox;  // children's centroid bounds
 };
 
-// ceil(log2(n)) for n >= 1.
-int ceil_log2(std::uint32_t n) {
-  int k = 0;
-  while ((std::uint64_t{1} << k) < n) ++k;
-  return k;
-}
-
 // Decides how to split one node and partitions its items accordingly; the policy of
 // build_bvh (bvh.h). One per thread: it owns the bins.
 class Splitter {
@@ -68,7 +61,7 @@ class Splitter {
 
     // Depth guard: median splits need ceil(log2(count)) more levels at most; take
     // them once the SAH could otherwise push a leaf to kBvhMaxDepth.
-    const bool depth_guard = static_cast<int>(t.depth) + ceil_log2(count) + 1 >= kBvhMaxDepth;
+    const bool depth_guard = near_depth_limit(t.depth, count);
     if (!t.spatial || depth_guard) {
       if (count <= max_leaf) return false;
       return median_split(t, out);
@@ -227,15 +220,9 @@ class Splitter {
     return _mm_add_ps(_mm_mul_ps(high, _mm_set1_ps(65536.0f)), low);
   }
 
-  // Test cost of n primitives in leaf blocks of leaf_block_width, in primitive tests: n plus
-  // padding_cost per empty slot of the last block (a shift for the usual power-of-two
-  // widths: the sweep asks twice per bin).
-  float slots(std::uint32_t n) const {
-    const std::uint32_t w = static_cast<std::uint32_t>(opt_.leaf_block_width);
-    const std::uint32_t padded =
-        block_shift_ >= 0 ? ((n + w - 1) >> block_shift_) << block_shift_ : (n + w - 1) / w * w;
-    return static_cast<float>(n) + opt_.padding_cost * static_cast<float>(padded - n);
-  }
+  // Test cost of n primitives (BvhBuildOptions::leaf_slots; the sweep prices its lanes with
+  // the SSE form above).
+  float slots(std::uint32_t n) const { return opt_.leaf_slots(n); }
   static int shift_of(int w) {
     for (int k = 0; k < 7; ++k)
       if (w == 1 << k) return k;
