@@ -434,6 +434,15 @@ std::vector<volley_hit> trace_all_forms(const volley_scene* scene, const std::ve
     if (single[i].prim == VOLLEY_INVALID_PRIM ? !std::isnan(n[0]) : !(std::isnan(n[0]) || std::fabs(len - 1.0) < 1e-5))
       finding("geometric_normal is neither unit nor NaN", i);
   }
+  // The batch of normals: each the single call's, bit for bit.
+  std::vector<float> normals(3 * rays.size());
+  if (volley_geometric_normals(scene, single.data(), single.size(), normals.data()) != VOLLEY_OK)
+    finding("geometric_normals failed", 0);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    float n[3];
+    volley_geometric_normal(scene, &single[i], n);
+    if (std::memcmp(n, &normals[3 * i], sizeof n) != 0) finding("geometric_normals disagrees with geometric_normal", i);
+  }
   return single;
 }
 

@@ -1,10 +1,20 @@
 #!/usr/bin/env python3
-"""The Python package's overhead against the C++ API on the same rays and points:
-cast_rays against `volley trace --mode stream` (Accel::intersect on a ray array; with
---threads above 1, `--mode batch`, the same call on a thread count) and compute_distance
-against `volley query --op distance` (Accel::distances), best of --reps each,
-alternating, at each thread count of --threads (one by default; "1,2,4,8,16" gives the
-scaling of both sides). Prints a markdown table with the CPU model.
+"""The Python package's overhead against the C++ API on the same rays and points, each
+call against its C++ twin (the same answers):
+
+  cast_rays           volley trace --mode stream --normals (Accel::intersect on a ray
+                      array, then Accel::geometric_normals: Open3D's dictionary has normals),
+                      and without --normals (the hits alone: 24 bytes a ray against the
+                      dictionary's 32 and no normals)
+  test_occlusions     volley trace --mode stream --occluded (Accel::occluded on a ray array)
+  count_intersections volley trace --mode stream --count (Accel::count_intersections on a
+                      ray array)
+  compute_distance    volley query --op distance (Accel::distances)
+
+With --threads above 1 the stream calls become `--mode batch` (the same call on a thread
+count). Best of --reps each, alternating, at each thread count of --threads (one by
+default; "1,2,4,8,16" gives the scaling of both sides). Prints a markdown table with the
+CPU model.
 
   PYTHONPATH=build/release/python /usr/bin/python3 perf/python_overhead.py ../shared/scenes/stanford-bunny.obj
 """
@@ -88,24 +98,37 @@ def main():
         return min(times)
 
     threads = a.threads
-    calls = ("cast_rays vs Accel::intersect(Ray*, n)", "compute_distance vs Accel::distances")
-    best = {(c, t): ([], []) for c in calls for t in threads}  # C++ times, Python times
+    rays_args = [a.mesh, "--rays", rays_file, "--reps", str(a.reps)]
+    pts_args = [a.mesh, "--points", pts_file, "--op", "distance", "--reps", str(a.reps)]
+
+    def stream(t):
+        return ["--mode", "stream" if t == 1 else "batch", "--threads", str(t)]
+
+    # (label, the C++ command's arguments for t threads, the Python call for t threads)
+    calls = [
+        ("cast_rays vs intersect + geometric_normals", lambda t: ["trace"] + rays_args + stream(t) + ["--normals"],
+         lambda t: scene.cast_rays(rays, nthreads=t)),
+        ("cast_rays vs intersect (no normals)", lambda t: ["trace"] + rays_args + stream(t),
+         lambda t: scene.cast_rays(rays, nthreads=t)),
+        ("test_occlusions vs occluded", lambda t: ["trace"] + rays_args + stream(t) + ["--occluded"],
+         lambda t: scene.test_occlusions(rays, nthreads=t)),
+        ("count_intersections vs count_intersections", lambda t: ["trace"] + rays_args + stream(t) + ["--count"],
+         lambda t: scene.count_intersections(rays, nthreads=t)),
+        ("compute_distance vs distances", lambda t: ["query"] + pts_args + ["--threads", str(t)],
+         lambda t: scene.compute_distance(pts, nthreads=t)),
+    ]
+    best = {(c[0], t): ([], []) for c in calls for t in threads}  # C++ times, Python times
     for _ in range(a.rounds):
         for t in threads:
-            mode = "stream" if t == 1 else "batch"
-            cpp, py = best[(calls[0], t)]
-            cpp.append(best_line(a.volley, ["trace", a.mesh, "--rays", rays_file, "--mode", mode, "--threads", str(t),
-                                            "--reps", str(a.reps)]))
-            py.append(py_best(lambda: scene.cast_rays(rays, nthreads=t)))
-            cpp, py = best[(calls[1], t)]
-            cpp.append(best_line(a.volley, ["query", a.mesh, "--points", pts_file, "--op", "distance", "--threads",
-                                            str(t), "--reps", str(a.reps)]))
-            py.append(py_best(lambda: scene.compute_distance(pts, nthreads=t)))
+            for label, cpp_args, py_call in calls:
+                cpp, py = best[(label, t)]
+                cpp.append(best_line(a.volley, cpp_args(t)))
+                py.append(py_best(lambda: py_call(t)))
     print(f"CPU: {cpu_model()} ({os.cpu_count()} cores); mesh {a.mesh} ({len(triangles)} triangles); {len(rays)} "
           f"{a.workload} rays / 1M points; best of {a.reps} x {a.rounds} alternating rounds\n")
     print("| call | threads | C++ ms | Python ms | Python overhead | C++ speedup | Python speedup |")
     print("|---|---|---|---|---|---|---|")
-    for c in calls:
+    for c, _, _ in calls:
         c1, p1 = (min(x) for x in best[(c, threads[0])])
         for t in threads:
             cpp, py = (min(x) for x in best[(c, t)])

@@ -6,45 +6,22 @@
 #include <cstring>
 #include <limits>
 
-#include "accel/parallel.h"
 #include "arrays.h"
+#include "ray_batches.h"
 
 namespace volley::python {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
-/// Rays per piece of a batch: the pieces' rays and hits stay in the cache, in buffers each
-/// thread keeps, between the caller's arrays and the kernel.
-constexpr std::size_t kPiece = 1024;
-
-/// Open3D's rays (ox oy oz dx dy dz per row) as volley's over [tnear, tfar).
+/// Open3D's rays (ox oy oz dx dy dz per row) as volley's over [tnear, tfar): all of them,
+/// for the queries whose C++ form takes the whole batch.
 std::vector<Ray> to_rays(const float* r, std::size_t n, float tnear, float tfar) {
   std::vector<Ray> out(n);
   for (std::size_t i = 0; i < n; ++i, r += 6) out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
   return out;
 }
 
-/// The same into a buffer of this thread, for the piece rows [b, e).
-const Ray* piece_rays(const float* rows, std::size_t b, std::size_t e, float tnear, float tfar) {
-  thread_local Ray rays[kPiece];
-  const float* r = rows + 6 * b;
-  for (std::size_t i = 0; i < e - b; ++i, r += 6) rays[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
-  return rays;
-}
-
 void check_threads(int nthreads) {
   if (nthreads < 0) throw py::value_error("nthreads: expected 0 (all cores) or a positive count, got " + std::to_string(nthreads));
-}
-
-/// body(begin, end) over [0, n) in pieces of at most kPiece: on all cores (nthreads = 0),
-/// this thread alone (1) or an arena of nthreads (Accel's batch rule). Called without the GIL.
-template <class Body>
-void parallel(std::size_t n, int nthreads, Body&& body) {
-  auto pieces = [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; p += kPiece) body(p, std::min(e, p + kPiece));
-  };
-  accel::for_chunks("nthreads", n, n <= kPiece ? 1 : nthreads, pieces, kPiece);
 }
 
 void check_samples(int nsamples) {
@@ -202,19 +179,13 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
   auto uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
   float *pt = t.mutable_data(), *puv = uvs.mutable_data(), *pn = normals.mutable_data();
   std::uint32_t *pg = geometry_ids.mutable_data(), *pp = primitive_ids.mutable_data();
-  const float* rows = in.rows.data();
+  const HitColumns columns{pt, pg, pp, puv, pn};
   {
     py::gil_scoped_release free;
-    parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-      thread_local Hit hits[kPiece];
-      accel.intersect(piece_rays(rows, b, e, 0.0f, kInf), e - b, hits);
-      for (std::size_t k = 0; k < e - b; ++k) {
-        const Hit& h = hits[k];
-        const std::size_t i = b + k;
-        pt[i] = h.t, pg[i] = h.geom, pp[i] = h.prim;
-        puv[2 * i] = h.hit() ? h.u : 0.0f, puv[2 * i + 1] = h.hit() ? h.v : 0.0f;
-        normal_of(h, pn + 3 * i);
-      }
+    for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
+      Hit hits[kGroup];
+      accel.intersect(group, m, hits);
+      write_hits(accel, hits, b, m, columns);
     });
   }
   py::dict out;
@@ -230,12 +201,11 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
   const Accel& accel = committed();
   auto out = new_array<bool>(lead);
   bool* po = out.mutable_data();
-  const float* rows = in.rows.data();
   {
     py::gil_scoped_release free;
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
-    parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-      accel.occluded(piece_rays(rows, b, e, tnear, tfar), e - b, reinterpret_cast<std::uint8_t*>(po + b));
+    for_ray_groups(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* group, std::size_t b, std::size_t m) {
+      accel.occluded(group, m, reinterpret_cast<std::uint8_t*>(po + b));
     });
   }
   return out;
@@ -247,17 +217,18 @@ py::array RaycastingScene::count_intersections(const py::handle& rays, int nthre
   const std::size_t n = in.n;
   const Accel& accel = committed();
   auto out = new_array<std::int32_t>(lead);
+  std::uint32_t* counts = reinterpret_cast<std::uint32_t*>(out.mutable_data());
   {
     py::gil_scoped_release free;
-    const std::vector<Ray> all = to_rays(in.rows.data(), n, 0.0f, kInf);
-    accel.count_intersections(all.data(), n, reinterpret_cast<std::uint32_t*>(out.mutable_data()), nthreads);
+    for_ray_groups<kPiece>(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
+      accel.count_intersections(group, m, counts + b, 1);
+    });
   }
   return out;
 }
 
 py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthreads) {
   const RaysIn in = rays_in(rays, nthreads);
-  const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
   HitLists lists;

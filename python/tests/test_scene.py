@@ -53,6 +53,27 @@ def test_leading_dimensions_and_layouts_are_kept():
     np.testing.assert_array_equal(b["t_hit"], a["t_hit"][:, ::2])
 
 
+def test_large_batches_answer_as_small_ones_on_any_thread_count():
+    # Answers of 1 MiB or more are streamed into reused, aligned memory group by group; a
+    # count that is no multiple of the groups ends in a part group. Small calls (plain
+    # arrays) are the reference, the scene and rays the same.
+    s = box_scene()
+    rng = np.random.default_rng(11)
+    n = 270_001
+    rays = np.hstack([rng.uniform(-1, 2, (n, 3)), rng.normal(size=(n, 3))]).astype(np.float32)
+    small = [s.cast_rays(rays[i:i + 4999], nthreads=1) for i in range(0, n, 4999)]
+    for threads in (1, 2, 0):
+        big = s.cast_rays(rays, nthreads=threads)
+        for key in ("t_hit", "geometry_ids", "primitive_ids", "primitive_uvs", "primitive_normals"):
+            np.testing.assert_array_equal(big[key], np.concatenate([a[key] for a in small]), err_msg=key)
+        np.testing.assert_array_equal(s.test_occlusions(rays, nthreads=threads),
+                                      np.concatenate([s.test_occlusions(rays[i:i + 4999]) for i in range(0, n, 4999)]))
+        np.testing.assert_array_equal(s.count_intersections(rays, nthreads=threads),
+                                      np.concatenate([s.count_intersections(rays[i:i + 4999]) for i in range(0, n, 4999)]))
+    assert np.isfinite(big["t_hit"]).sum() > n // 10  # rays that hit, and rays that miss
+    assert np.isinf(big["t_hit"]).sum() > n // 10
+
+
 def test_occlusion_counts_and_lists_count_shared_edges_once():
     s = box_scene()
     # Straight down through the top face's diagonal (shared by two triangles) and the bottom's.

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "accel/accel_impl.h"
+#include "accel/parallel.h"
 
 namespace volley {
 namespace {
@@ -15,6 +16,28 @@ std::array<float, 3> unit(const double v[3]) {
   const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   if (!(len > 0.0) || !std::isfinite(len)) return {kNaN, kNaN, kNaN};
   return {static_cast<float>(v[0] / len), static_cast<float>(v[1] / len), static_cast<float>(v[2] / len)};
+}
+
+/// unit((p1 - p0) x (p2 - p0)) in double: for triangles whose float cross product over- or
+/// underflows.
+[[gnu::noinline, gnu::cold]] std::array<float, 3> triangle_normal_double(const float* p0, const float* p1, const float* p2) {
+  const double f1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+  const double f2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+  const double m[3] = {f1[1] * f2[2] - f1[2] * f2[1], f1[2] * f2[0] - f1[0] * f2[2], f1[0] * f2[1] - f1[1] * f2[0]};
+  return unit(m);
+}
+
+/// unit((p1 - p0) x (p2 - p0)): in float (a normal per hit is asked for batches of
+/// millions), in double where float over- or underflows.
+inline std::array<float, 3> triangle_normal(const float* p0, const float* p1, const float* p2) {
+  const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+  const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  const float len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  if (!(len2 > 0x1p-100f && len2 < 0x1p100f)) [[unlikely]]
+    return triangle_normal_double(p0, p1, p2);
+  const float s = 1.0f / std::sqrt(len2);
+  return {n[0] * s, n[1] * s, n[2] * s};
 }
 
 }  // namespace
@@ -38,22 +61,7 @@ std::array<float, 3> Accel::Impl::local_normal(std::uint32_t geom, std::uint32_t
       v[k] = &triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
     }
   }
-  // In float (Python asks for a normal per hit), in double where float over- or underflows.
-  const float e1[3] = {v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
-  const float e2[3] = {v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
-  const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-  const float len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  if (len2 > 0x1p-100f && len2 < 0x1p100f) {
-    const float s = 1.0f / std::sqrt(len2);
-    return {n[0] * s, n[1] * s, n[2] * s};
-  }
-  double d[3][3];
-  for (int k = 0; k < 3; ++k)
-    for (int a = 0; a < 3; ++a) d[k][a] = v[k][a];
-  const double f1[3] = {d[1][0] - d[0][0], d[1][1] - d[0][1], d[1][2] - d[0][2]};
-  const double f2[3] = {d[2][0] - d[0][0], d[2][1] - d[0][1], d[2][2] - d[0][2]};
-  const double m[3] = {f1[1] * f2[2] - f1[2] * f2[1], f1[2] * f2[0] - f1[0] * f2[2], f1[0] * f2[1] - f1[1] * f2[0]};
-  return unit(m);
+  return triangle_normal(v[0], v[1], v[2]);
 }
 
 std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
@@ -68,6 +76,30 @@ std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
   double w[3];
   for (int c = 0; c < 3; ++c) w[c] = double(m[c]) * n[0] + double(m[4 + c]) * n[1] + double(m[8 + c]) * n[2];
   return unit(w);
+}
+
+void Accel::geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads) const {
+  if (!impl_->committed) throw Error("geometric_normals: call commit() after adding geometry");
+  const Impl& im = *impl_;
+  auto normals = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Hit& h = hits[i];
+      std::array<float, 3> n{kNaN, kNaN, kNaN};
+      if (!h.hit()) {
+        // a miss (most rays of many batches): no call
+      } else if (const Impl::Geometry* g = h.inst == kInvalidId && !im.packed && h.geom < im.geometries.size()
+                                             ? &im.geometries[h.geom] : nullptr;
+                 g && !g->instance && !g->polygon && h.prim < g->count) {
+        // A triangle of this Accel as added (most hits): local_normal without its call.
+        const glm::vec3* p = &im.triangles[3 * (g->index + h.prim)];
+        n = triangle_normal(&p[0].x, &p[1].x, &p[2].x);
+      } else {
+        n = geometric_normal(h);
+      }
+      xyz[3 * i] = n[0], xyz[3 * i + 1] = n[1], xyz[3 * i + 2] = n[2];
+    }
+  };
+  accel::for_chunks("geometric_normals", count, threads, normals, 4096);
 }
 
 }  // namespace volley

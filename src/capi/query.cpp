@@ -76,6 +76,7 @@ static_assert(same_layout<4>() && same_layout<8>() && same_layout<16>(), "C pack
 // link-time optimisation). Embree's API hands its RTCRay structs to its kernels the same way.
 const Ray* as_cpp(const volley_ray* r) { return reinterpret_cast<const Ray*>(r); }
 Hit* as_cpp(volley_hit* h) { return reinterpret_cast<Hit*>(h); }
+const Hit* as_cpp(const volley_hit* h) { return reinterpret_cast<const Hit*>(h); }
 template <int K>
 const RayPacket<K>& as_cpp(const typename CTypes<K>::Rays* p) {
   return *reinterpret_cast<const RayPacket<K>*>(p);
@@ -345,6 +346,17 @@ volley_status volley_geometric_normal(const volley_scene* scene, const volley_hi
     require_pointer(normal, "normal");
     const std::array<float, 3> n = scene->accel.geometric_normal(*reinterpret_cast<const volley::Hit*>(hit));
     normal[0] = n[0], normal[1] = n[1], normal[2] = n[2];
+  });
+}
+
+volley_status volley_geometric_normals(const volley_scene* scene, const volley_hit* hits, size_t count,
+                                       float* normals) {
+  return guarded("volley_geometric_normals", VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    if (count == 0) return;
+    require_pointer(hits, "hits");
+    require_pointer(normals, "normals");
+    scene->accel.geometric_normals(as_cpp(hits), count, normals);
   });
 }
 

@@ -5,13 +5,13 @@
 //
 //   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
 //          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N robust=0|1
-//          reference=0|1 mask=M|none query=closest|occluded|count|all       (one line)
+//          reference=0|1 mask=M|none query=closest|occluded|count|all normals=0|1  (one line)
 //
 // packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
 // hits counts closest hits, blocked rays with --occluded, or every hit (crossings) with
 // --count and --all; robust=0 with --fast-slabs,
-// reference=1 with --reference, mask the --mask the rays were traced with. Keys are only
-// ever added.
+// reference=1 with --reference, mask the --mask the rays were traced with, normals=1 when
+// --normals computed each hit's normal inside the timing. Keys are only ever added.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -51,6 +51,7 @@ struct TraceArgs {
   bool count = false;  ///< --count: crossings per ray (.vcnt)
   bool all = false;    ///< --all: every hit per ray (.vall)
   bool stats = false;  ///< --stats: the single-ray walk's visits per ray
+  bool normals = false;  ///< --normals: each closest hit's geometric normal too, timed
   std::string mode = "single";
   int packet = 16;
   int threads = 0;
@@ -70,6 +71,7 @@ struct Answers {
   std::vector<std::uint8_t> blocked;
   std::vector<std::uint32_t> counts;
   std::vector<std::vector<Hit>> lists;
+  std::vector<float> normals;  ///< --normals: 3 per ray
 };
 
 /// The crossing queries, ray by ray (they have no packet forms): counts or hit lists.
@@ -119,6 +121,14 @@ void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* mas
 ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
                         const std::string& mode, int packet, bool occluded, bool crossings, int threads) {
   const Ray* r = rays.data();
+  if (crossings && (mode == "stream" || mode == "batch") && !masks) {
+    // --count on the stream API (Accel::count_intersections on a ray array: runs of rays
+    // go as packets), per chunk on the calling thread or the whole file on `threads`.
+    const int api_threads = mode == "batch" ? threads : 1;
+    return [&accel, r, api_threads](std::size_t begin, std::size_t end, Answers& out) {
+      accel.count_intersections(r + begin, end - begin, out.counts.data() + begin, api_threads);
+    };
+  }
   if (crossings)
     return [&accel, r, masks](std::size_t begin, std::size_t end, Answers& out) {
       trace_crossings(accel, r, masks, begin, end, out);
@@ -151,6 +161,15 @@ ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const 
     } else {
       for (std::size_t i = begin; i < end; ++i) out.hits[i] = masks ? accel.intersect(r[i], masks[i]) : accel.intersect(r[i]);
     }
+  };
+}
+
+/// `trace`, then the geometric normals of the hits it found (--normals), on `threads` as
+/// the batch mode's call (1 where the caller spreads the chunks).
+ChunkTracer with_normals(const Accel& accel, ChunkTracer trace, int threads) {
+  return [&accel, trace = std::move(trace), threads](std::size_t begin, std::size_t end, Answers& out) {
+    trace(begin, end, out);
+    accel.geometric_normals(out.hits.data() + begin, end - begin, out.normals.data() + 3 * begin, threads);
   };
 }
 
@@ -190,10 +209,17 @@ Runner register_trace(CLI::App& app) {
   auto* occluded = cmd->add_flag("--occluded", args->occluded, "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
   auto* count = cmd->add_flag("--count", args->count,
                               "Count every hit along each ray (crossings, each shared edge or vertex once: docs/crossings.md);\n"
-                              "-o writes a count file (.vcnt). Single rays only");
-  cmd->add_flag("--all", args->all, "Every hit along each ray, nearest first; -o writes a hit-list file (.vall). Single rays only")
+                              "-o writes a count file (.vcnt). Single rays, or the stream API with --mode stream or batch");
+  auto* all = cmd->add_flag("--all", args->all,
+                            "Every hit along each ray, nearest first; -o writes a hit-list file (.vall). Single rays only")
+                    ->excludes(occluded)
+                    ->excludes(count);
+  cmd->add_flag("--normals", args->normals,
+                "Also the geometric normal of every closest hit (Accel::geometric_normals, what Python's\n"
+                "cast_rays returns beside the hits), inside the timing: the C++ twin of cast_rays")
       ->excludes(occluded)
-      ->excludes(count);
+      ->excludes(count)
+      ->excludes(all);
   count->excludes(occluded);
   cmd->add_option("--mode", args->mode,
                   "single (one ray at a time), packet (SoA packets of consecutive rays), stream (the stream API,\n"
@@ -226,8 +252,12 @@ Runner register_trace(CLI::App& app) {
   return [args]() {
     const TraceArgs& a = *args;
     const bool crossings = a.count || a.all;
-    if (crossings && a.mode != "single")
-      throw std::invalid_argument("--count and --all trace single rays: leave --mode at single (they have no packet or stream forms)");
+    if (a.all && a.mode != "single")
+      throw std::invalid_argument("--all traces single rays: leave --mode at single");
+    if (a.count && a.mode == "packet")
+      throw std::invalid_argument("--count has no packet form: --mode single, stream or batch");
+    if (a.count && a.mask && a.mode != "single")
+      throw std::invalid_argument("--count with --mask traces single rays: leave --mode at single");
     if (a.stats && crossings) throw std::invalid_argument("--stats counts the closest-hit or occlusion walk: not with --count or --all");
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
@@ -240,13 +270,15 @@ Runner register_trace(CLI::App& app) {
     const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     const std::vector<std::uint32_t> masks(a.mask ? rays.size() : 0, a.mask.value_or(kMaskAll));
-    const ChunkTracer trace =
+    ChunkTracer trace =
         make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded, crossings, threads);
+    if (a.normals) trace = with_normals(accel, std::move(trace), a.mode == "batch" ? threads : 1);
     Answers answers;
     if (a.occluded) answers.blocked.assign(rays.size(), 0);
     else if (a.count) answers.counts.assign(rays.size(), 0);
     else if (a.all) answers.lists.resize(rays.size());
     else answers.hits.assign(rays.size(), Hit{});
+    if (a.normals) answers.normals.assign(3 * rays.size(), 0.0f);
     const char* query = a.occluded ? "occluded" : a.count ? "count" : a.all ? "all" : "closest";
 
     std::vector<double> seconds;
@@ -270,10 +302,11 @@ Runner register_trace(CLI::App& app) {
     const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
     std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s\n",
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d\n",
                 a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
                 a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
-                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query);
+                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query,
+                a.normals ? 1 : 0);
     char found[96];
     const double share = rays.empty() ? 0.0 : double(hit_count) / double(rays.size());
     if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);

@@ -250,6 +250,9 @@ class VOLLEY_API Accel {
   /// for a miss, for a hit naming nothing here, or for a degenerate triangle. Works on a
   /// committed Accel (built or loaded).
   std::array<float, 3> geometric_normal(const Hit& hit) const;
+  /// geometric_normal for `count` hits, three floats each into `xyz`, on the calling thread
+  /// (threads = 1, the default), the caller's oneTBB arena (0) or an arena of `threads`.
+  void geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads = 1) const;
 
   /// Facts about the committed structure.
   AccelInfo info() const;

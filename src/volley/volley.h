@@ -428,6 +428,10 @@ VOLLEY_API volley_status volley_occluded_stream(const volley_scene* scene, const
  *  miss or a hit naming nothing in this scene. Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL
  *  argument), VOLLEY_ERROR_NOT_COMMITTED. */
 VOLLEY_API volley_status volley_geometric_normal(const volley_scene* scene, const volley_hit* hit, float normal[3]);
+/** volley_geometric_normal for `count` hits, three floats each into `normals`. Errors:
+ *  VOLLEY_ERROR_INVALID_ARGUMENT (NULL array with count > 0), VOLLEY_ERROR_NOT_COMMITTED. */
+VOLLEY_API volley_status volley_geometric_normals(const volley_scene* scene, const volley_hit* hits, size_t count,
+                                                  float* normals);
 
 /** Checks rays without tracing them: VOLLEY_OK when every ray can hit something;
  *  VOLLEY_ERROR_INVALID_RAY for the first ray that is always a miss (non-finite origin or

@@ -323,5 +323,37 @@ TEST_CASE("geometric_normal: triangles as added, polygons, instances under the i
     for (int k = 0; k < 3; ++k) CHECK((got[k] == want[k] || (std::isnan(got[k]) && std::isnan(want[k]))));
   }
   CHECK(normal_is(loaded.geometric_normal(Hit{1.0f, 0, 0, 0, p}), 1, 0, 0));
+
+  // The batch form answers as the single one, hit by hit, whatever the hit names.
+  const std::vector<std::pair<const Accel*, Hit>> cases = {
+      {&a, Hit{1.0f, 0, 0, 0, g}},      {&a, Hit{1.0f, 0, 0, 1, g}},       {&a, Hit{1.0f, 0, 0, 2, g}},
+      {&a, Hit{1.0f, 0, 0, 0, p}},      {&a, Hit{}},                       {&a, Hit{1.0f, 0, 0, 9, g}},
+      {&a, Hit{1.0f, 0, 0, 0, 7}},      {&scene, Hit{1.0f, 0, 0, 0, p, inst}}, {&scene, Hit{1.0f, 0, 0, 1, g, inst}},
+      {&scene, Hit{1.0f, 0, 0, 0, g, 5}}, {&sheared, Hit{1.0f, 0, 0, 0, p, s}}, {&loaded, Hit{1.0f, 0, 0, 1, g}},
+      {&loaded, Hit{1.0f, 0, 0, 2, g}}};
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    CAPTURE(c);
+    const Accel& owner = *cases[c].first;
+    const Hit hits[2] = {cases[c].second, Hit{}};
+    float batch[6];
+    owner.geometric_normals(hits, 2, batch);
+    const auto want = owner.geometric_normal(hits[0]);
+    for (int k = 0; k < 3; ++k) CHECK((batch[k] == want[k] || (std::isnan(batch[k]) && std::isnan(want[k]))));
+    for (int k = 3; k < 6; ++k) CHECK(std::isnan(batch[k]));
+  }
+  // On threads: the same normals (the batch split among them), a negative count refused.
+  std::vector<Hit> many;
+  for (int r = 0; r < 2000; ++r)
+    for (std::size_t c = 0; c < 7; ++c) many.push_back(cases[c].second);  // the cases of `a`
+  std::vector<float> one(3 * many.size()), spread(3 * many.size());
+  a.geometric_normals(many.data(), many.size(), one.data());
+  for (const int threads : {0, 3}) {
+    a.geometric_normals(many.data(), many.size(), spread.data(), threads);
+    CHECK(std::memcmp(one.data(), spread.data(), one.size() * sizeof(float)) == 0);
+  }
+  CHECK_THROWS_WITH_AS(a.geometric_normals(many.data(), many.size(), spread.data(), -1), doctest::Contains("threads"),
+                       volley::Error);
+  float none[3];
+  CHECK_THROWS_AS(Accel().geometric_normals(&cases[0].second, 1, none), volley::Error);  // not committed
   fs::remove(file);
 }

@@ -222,6 +222,47 @@ TEST_CASE("trace: every mode and thread count gives the same answers, and the li
   }
 }
 
+TEST_CASE("trace --count on the stream API and --normals: the same answers as single rays, bad pairs refused") {
+  const std::string scene = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
+  const fs::path rays = temp_path("count_modes.vray");
+  REQUIRE(run("rays " + scene + " --workload diffuse --width 40 --height 30 -o " + rays.string()).status == 0);
+  const fs::path single = temp_path("count_single.vcnt");
+  REQUIRE(run("trace " + scene + " --rays " + rays.string() + " --count --reps 1 -o " + single.string()).status == 0);
+  for (const std::string mode : {"stream", "batch"}) {
+    for (const int threads : {1, 2}) {
+      CAPTURE(mode);
+      CAPTURE(threads);
+      const fs::path counts = temp_path("count_" + mode + ".vcnt");
+      const Run r = run("trace " + scene + " --rays " + rays.string() + " --count --reps 1 --mode " + mode + " --threads " +
+                        std::to_string(threads) + " -o " + counts.string());
+      REQUIRE(r.status == 0);
+      CHECK(trace_line(r.output)["query"] == "count");
+      CHECK(bytes_of(counts) == bytes_of(single));
+    }
+  }
+  // --normals: timed beside the hits, which stay the same; the line says so.
+  const fs::path plain = temp_path("normals_off.vhit"), with = temp_path("normals_on.vhit");
+  Run r = run("trace " + scene + " --rays " + rays.string() + " --mode stream --reps 1 -o " + plain.string());
+  REQUIRE(r.status == 0);
+  CHECK(trace_line(r.output)["normals"] == "0");
+  r = run("trace " + scene + " --rays " + rays.string() + " --mode stream --reps 1 --normals -o " + with.string());
+  REQUIRE(r.status == 0);
+  CHECK(trace_line(r.output)["normals"] == "1");
+  CHECK(bytes_of(plain) == bytes_of(with));
+
+  r = run("trace " + scene + " --rays " + rays.string() + " --count --mode packet");
+  CHECK(r.status == 1);
+  CHECK(has(r.output, "--count has no packet form"));
+  r = run("trace " + scene + " --rays " + rays.string() + " --all --mode stream");
+  CHECK(r.status == 1);
+  CHECK(has(r.output, "--all traces single rays"));
+  r = run("trace " + scene + " --rays " + rays.string() + " --count --mask 1 --mode batch");
+  CHECK(r.status == 1);
+  CHECK(has(r.output, "--count with --mask traces single rays"));
+  CHECK(run("trace " + scene + " --rays " + rays.string() + " --normals --occluded").status != 0);
+  CHECK(run("trace " + scene + " --rays " + rays.string() + " --normals --count").status != 0);
+}
+
 TEST_CASE("trace --stats: the walk's visits per ray, refused where the walk cannot count") {
   const fs::path primary = temp_path("stats_primary.vray");
   REQUIRE(run("rays " + kCornell + " --workload primary --width 20 --height 20 -o " + primary.string()).status == 0);

@@ -2,6 +2,7 @@
  * inside/outside and closest points through volley/volley_queries.h. C99. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <volley/volley.h>
 
@@ -68,6 +69,17 @@ static void check_batches(const volley_scene* scene) {
           "the geometric normal of a hit", i);
   }
   expect(volley_geometric_normal(scene, NULL, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_geometric_normal");
+  {
+    float batch[3 * 40];
+    expect(volley_geometric_normals(scene, hits, 40, batch), VOLLEY_OK, "volley_geometric_normals");
+    for (int i = 0; i < 40; ++i) {
+      float n[3];
+      volley_geometric_normal(scene, &hits[i], n);
+      check(memcmp(n, batch + 3 * i, sizeof n) == 0, "the batch of normals answers as one hit at a time", i);
+    }
+    expect(volley_geometric_normals(scene, hits, 40, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_geometric_normals");
+    expect(volley_geometric_normals(scene, NULL, 0, NULL), VOLLEY_OK, "volley_geometric_normals");
+  }
   expect(volley_intersect_batch(scene, rays, NULL, 40, hits, -1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_intersect_batch");
   expect(volley_occluded_batch(scene, rays, NULL, 40, NULL, 1), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_occluded_batch");
   expect(volley_occluded_batch(scene, NULL, NULL, 0, NULL, 1), VOLLEY_OK, "volley_occluded_batch");

@@ -1,0 +1,64 @@
+#include "ray_batches.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <emmintrin.h>
+
+namespace volley::python {
+namespace {
+
+/// Copies `bytes` to `to`, past the cache where `to` allows: non-temporal stores of whole
+/// aligned 64-byte lines (the answer arrays are written once and not read here, so reading
+/// their lines in first would only double the memory traffic); the rest as memcpy.
+void stream_out(void* to, const void* from, std::size_t bytes) {
+  char* d = static_cast<char*>(to);
+  const char* s = static_cast<const char*>(from);
+  if (reinterpret_cast<std::uintptr_t>(d) % 64 == 0) {
+    for (; bytes >= 64; bytes -= 64, d += 64, s += 64)
+      for (int k = 0; k < 4; ++k)
+        _mm_stream_si128(reinterpret_cast<__m128i*>(d) + k, _mm_loadu_si128(reinterpret_cast<const __m128i*>(s) + k));
+  }
+  std::memcpy(d, s, bytes);
+}
+
+/// Rays between the rows being converted and the rows asked for from memory.
+constexpr std::size_t kPrefetchRays = 128;
+
+}  // namespace
+
+void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out) {
+  // One request per row, spread over the conversion (a burst of them would stall it).
+  const std::size_t ahead = std::max(m, kPrefetchRays);
+  const float* r = rows + 6 * b;
+  for (std::size_t i = 0; i < m; ++i, r += 6) {
+    if (b + i + ahead < n) __builtin_prefetch(r + 6 * ahead);
+    out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
+  }
+}
+
+void finish_piece() { _mm_sfence(); }
+
+void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out) {
+  alignas(64) float t[kGroup], uv[2 * kGroup], normals[3 * kGroup] = {};
+  alignas(64) std::uint32_t geometry[kGroup], primitive[kGroup];
+  bool any_hit = false;
+  for (std::size_t i = 0; i < m; ++i) {
+    const Hit& h = hits[i];
+    const bool hit = h.hit();
+    any_hit |= hit;
+    t[i] = h.t, geometry[i] = h.geom, primitive[i] = h.prim;
+    uv[2 * i] = hit ? h.u : 0.0f, uv[2 * i + 1] = hit ? h.v : 0.0f;
+  }
+  if (any_hit) {  // many groups of primary rays miss altogether
+    accel.geometric_normals(hits, m, normals);
+    for (std::size_t i = 0; i < 3 * m; ++i) normals[i] = std::isnan(normals[i]) ? 0.0f : normals[i];
+  }
+  stream_out(out.t_hit + b, t, m * sizeof(float));
+  stream_out(out.geometry_ids + b, geometry, m * sizeof(std::uint32_t));
+  stream_out(out.primitive_ids + b, primitive, m * sizeof(std::uint32_t));
+  stream_out(out.primitive_uvs + 2 * b, uv, 2 * m * sizeof(float));
+  stream_out(out.primitive_normals + 3 * b, normals, 3 * m * sizeof(float));
+}
+
+}  // namespace volley::python

@@ -1,0 +1,74 @@
+// How the binding's ray queries walk the caller's rays: rows (ox oy oz dx dy dz) converted
+// group by group into volley's rays just before the kernel needs them, the threads given
+// pieces of whole groups, and the answers written group by group. The caller's arrays
+// (24 bytes a ray in, up to 32 out) are larger than any cache: spreading their traffic over
+// the tracing, instead of copying whole arrays before and after it, is what keeps the
+// package near the C++ stream API (perf/queries.md).
+#pragma once
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+#include "accel/parallel.h"
+#include "volley/accel.h"
+
+namespace volley::python {
+
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Rays per piece of a batch: the unit handed to a thread (at most 1024 rays a task).
+inline constexpr std::size_t kPiece = 1024;
+/// Rays per group: one packet, whose answers fill whole cache lines of the answer arrays.
+inline constexpr std::size_t kGroup = 16;
+static_assert(kPiece % kGroup == 0, "pieces hold whole groups");
+
+/// body(begin, end) over [0, n) in pieces of at most kPiece: on all cores (nthreads = 0),
+/// this thread alone (1) or an arena of nthreads (Accel's batch rule). Called without the GIL.
+template <class Body>
+void parallel(std::size_t n, int nthreads, Body&& body) {
+  auto pieces = [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; p += kPiece) body(p, std::min(e, p + kPiece));
+  };
+  accel::for_chunks("nthreads", n, n <= kPiece ? 1 : nthreads, pieces, kPiece);
+}
+
+/// Rays [b, b + m) of `rows` as volley's rays over [tnear, tfar), into `out`; the next
+/// group's rows (or, for small groups, those a few groups on) are asked for from memory
+/// meanwhile.
+void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out);
+
+/// Ends a piece's writes: the streamed answers visible to every thread before Python sees them.
+void finish_piece();
+
+/// body(rays, begin, m) for every group of `Group` rows of the n (the last may be shorter),
+/// over nthreads (parallel's rule). Queries whose calls cost more than a packet's answers
+/// take whole pieces as their groups.
+template <std::size_t Group = kGroup, class Body>
+void for_ray_groups(const float* rows, std::size_t n, int nthreads, float tnear, float tfar, Body&& body) {
+  static_assert(kPiece % Group == 0, "pieces hold whole groups");
+  parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+    Ray rays[Group];
+    for (std::size_t g = b; g < e; g += Group) {
+      const std::size_t m = std::min(e, g + Group) - g;
+      group_rays(rows, n, g, m, tnear, tfar, rays);
+      body(static_cast<const Ray*>(rays), g, m);
+    }
+    finish_piece();
+  });
+}
+
+/// cast_rays' answer arrays (Open3D's names).
+struct HitColumns {
+  float* t_hit;
+  std::uint32_t* geometry_ids;
+  std::uint32_t* primitive_ids;
+  float* primitive_uvs;
+  float* primitive_normals;
+};
+
+/// The hits of the rays [b, b + m) (m <= kGroup) into `out` in Open3D's conventions: zeros
+/// for the uv and normal of a miss, and for the normal of a degenerate triangle.
+void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out);
+
+}  // namespace volley::python
