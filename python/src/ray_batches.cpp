@@ -29,10 +29,9 @@ constexpr std::size_t kPrefetchRays = 128;
 
 void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out) {
   // One request per row, spread over the conversion (a burst of them would stall it).
-  const std::size_t ahead = std::max(m, kPrefetchRays);
   const float* r = rows + 6 * b;
   for (std::size_t i = 0; i < m; ++i, r += 6) {
-    if (b + i + ahead < n) __builtin_prefetch(r + 6 * ahead);
+    if (b + i + kPrefetchRays < n) __builtin_prefetch(r + 6 * kPrefetchRays);
     out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
   }
 }

@@ -33,24 +33,21 @@ void parallel(std::size_t n, int nthreads, Body&& body) {
   accel::for_chunks("nthreads", n, n <= kPiece ? 1 : nthreads, pieces, kPiece);
 }
 
-/// Rays [b, b + m) of `rows` as volley's rays over [tnear, tfar), into `out`; the next
-/// group's rows (or, for small groups, those a few groups on) are asked for from memory
-/// meanwhile.
+/// Rays [b, b + m) of `rows` (m <= kGroup) as volley's rays over [tnear, tfar), into
+/// `out`; the rows a few groups on are asked for from memory meanwhile.
 void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out);
 
 /// Ends a piece's writes: the streamed answers visible to every thread before Python sees them.
 void finish_piece();
 
-/// body(rays, begin, m) for every group of `Group` rows of the n (the last may be shorter),
-/// over nthreads (parallel's rule). Queries whose calls cost more than a packet's answers
-/// take whole pieces as their groups.
-template <std::size_t Group = kGroup, class Body>
+/// body(rays, begin, m) for every group of kGroup rows of the n (the last may be shorter),
+/// over nthreads (parallel's rule).
+template <class Body>
 void for_ray_groups(const float* rows, std::size_t n, int nthreads, float tnear, float tfar, Body&& body) {
-  static_assert(kPiece % Group == 0, "pieces hold whole groups");
   parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-    Ray rays[Group];
-    for (std::size_t g = b; g < e; g += Group) {
-      const std::size_t m = std::min(e, g + Group) - g;
+    Ray rays[kGroup];
+    for (std::size_t g = b; g < e; g += kGroup) {
+      const std::size_t m = std::min(e, g + kGroup) - g;
       group_rays(rows, n, g, m, tnear, tfar, rays);
       body(static_cast<const Ray*>(rays), g, m);
     }

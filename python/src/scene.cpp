@@ -220,7 +220,7 @@ py::array RaycastingScene::count_intersections(const py::handle& rays, int nthre
   std::uint32_t* counts = reinterpret_cast<std::uint32_t*>(out.mutable_data());
   {
     py::gil_scoped_release free;
-    for_ray_groups<kPiece>(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
+    for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
       accel.count_intersections(group, m, counts + b, 1);
     });
   }
