@@ -177,9 +177,8 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
   auto t = new_array<float>(lead);
   auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
   auto uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
-  float *pt = t.mutable_data(), *puv = uvs.mutable_data(), *pn = normals.mutable_data();
-  std::uint32_t *pg = geometry_ids.mutable_data(), *pp = primitive_ids.mutable_data();
-  const HitColumns columns{pt, pg, pp, puv, pn};
+  const HitColumns columns{t.mutable_data(), geometry_ids.mutable_data(), primitive_ids.mutable_data(),
+                           uvs.mutable_data(), normals.mutable_data()};
   {
     py::gil_scoped_release free;
     for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
