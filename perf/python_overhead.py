@@ -10,6 +10,8 @@ call against its C++ twin (the same answers):
   count_intersections volley trace --mode stream --count (Accel::count_intersections on a
                       ray array)
   compute_distance    volley query --op distance (Accel::distances)
+  with --all-points also compute_signed_distance, compute_occupancy (Accel::contains) and
+  compute_closest_points (Accel::closest_points) against `volley query --op ...`
 
 With --threads above 1 the stream calls become `--mode batch` (the same call on a thread
 count). Best of --reps each, alternating, at each thread count of --threads (one by
@@ -68,6 +70,8 @@ def main():
                     help="comma-separated thread counts, each 1 or more (nthreads on the Python side)")
     ap.add_argument("--workload", default="primary", choices=["primary", "diffuse"],
                     help="the rays (diffuse: their tmin offset moved into the origin on both sides)")
+    ap.add_argument("--all-points", action="store_true",
+                    help="also compute_signed_distance, compute_occupancy and compute_closest_points")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="volley_py_")
     rays_file, pts_file = os.path.join(tmp, "r.vray"), os.path.join(tmp, "p.vpts")
@@ -99,7 +103,7 @@ def main():
 
     threads = a.threads
     rays_args = [a.mesh, "--rays", rays_file, "--reps", str(a.reps)]
-    pts_args = [a.mesh, "--points", pts_file, "--op", "distance", "--reps", str(a.reps)]
+    pts_args = [a.mesh, "--points", pts_file, "--reps", str(a.reps)]
 
     def stream(t):
         return ["--mode", "stream" if t == 1 else "batch", "--threads", str(t)]
@@ -114,9 +118,20 @@ def main():
          lambda t: scene.test_occlusions(rays, nthreads=t)),
         ("count_intersections vs count_intersections", lambda t: ["trace"] + rays_args + stream(t) + ["--count"],
          lambda t: scene.count_intersections(rays, nthreads=t)),
-        ("compute_distance vs distances", lambda t: ["query"] + pts_args + ["--threads", str(t)],
+        ("compute_distance vs distances", lambda t: ["query"] + pts_args + ["--op", "distance", "--threads", str(t)],
          lambda t: scene.compute_distance(pts, nthreads=t)),
     ]
+    if a.all_points:
+        calls += [
+            ("compute_signed_distance vs distances", lambda t: ["query"] + pts_args + ["--op", "signed-distance",
+                                                                                      "--threads", str(t)],
+             lambda t: scene.compute_signed_distance(pts, nthreads=t)),
+            ("compute_occupancy vs contains", lambda t: ["query"] + pts_args + ["--op", "contains", "--threads", str(t)],
+             lambda t: scene.compute_occupancy(pts, nthreads=t)),
+            ("compute_closest_points vs closest_points", lambda t: ["query"] + pts_args + ["--op", "closest",
+                                                                                          "--threads", str(t)],
+             lambda t: scene.compute_closest_points(pts, nthreads=t)),
+        ]
     best = {(c[0], t): ([], []) for c in calls for t in threads}  # C++ times, Python times
     for _ in range(a.rounds):
         for t in threads:

@@ -1,6 +1,7 @@
 #include "ray_batches.h"
 
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 #include <emmintrin.h>
@@ -29,10 +30,18 @@ constexpr std::size_t kPrefetchRays = 128;
 
 void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out) {
   // One request per row, spread over the conversion (a burst of them would stall it).
+  // A row (o0 o1 o2 d0 d1 d2) becomes (o0 o1 o2 tnear | d0 d1 d2 tfar) by two loads inside
+  // the row, two unpacks with a bound and two shuffles.
+  static_assert(offsetof(Ray, tmin) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tmax) == 28 && sizeof(Ray) == 32,
+                "Ray is org, tmin, dir, tmax");
+  const __m128 tn = _mm_set1_ps(tnear), tf = _mm_set1_ps(tfar);
   const float* r = rows + 6 * b;
   for (std::size_t i = 0; i < m; ++i, r += 6) {
     if (b + i + kPrefetchRays < n) __builtin_prefetch(r + 6 * kPrefetchRays);
-    out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
+    const __m128 lo = _mm_loadu_ps(r), hi = _mm_loadu_ps(r + 2);               // o0 o1 o2 d0, o2 d0 d1 d2
+    const __m128 near = _mm_unpackhi_ps(lo, tn), far = _mm_unpackhi_ps(hi, tf);  // o2 tn d0 tn, d1 tf d2 tf
+    _mm_storeu_ps(out[i].org, _mm_shuffle_ps(lo, near, _MM_SHUFFLE(1, 0, 1, 0)));  // o0 o1 o2 tn
+    _mm_storeu_ps(out[i].dir, _mm_shuffle_ps(hi, far, _MM_SHUFFLE(1, 2, 2, 1)));   // d0 d1 d2 tf
   }
 }
 

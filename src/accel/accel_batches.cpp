@@ -85,7 +85,13 @@ namespace {
 /// stream policy (packets where they pay), in buffers each thread keeps.
 template <class Impl, class Each>
 void for_runs(const Impl& impl, const Ray* rays, std::size_t begin, std::size_t end, Each&& each) {
-  thread_local std::vector<Hit> lists[16];
+  thread_local std::vector<Hit> kept[16];
+  // Its address taken once: in a shared library (the Python module, libvolley.so) finding
+  // a thread_local is a call to __tls_get_addr, and GCC repeats the call at every use (once
+  // per ray here) rather than keep the address in a register, unless it cannot see where
+  // the pointer came from.
+  std::vector<Hit>* lists = kept;
+  asm("" : "+r"(lists));
   for (std::size_t first = begin; first < end; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, end - first);
     for (std::size_t i = 0; i < n; ++i) lists[i].clear();
