@@ -86,12 +86,7 @@ namespace {
 template <class Impl, class Each>
 void for_runs(const Impl& impl, const Ray* rays, std::size_t begin, std::size_t end, Each&& each) {
   thread_local std::vector<Hit> kept[16];
-  // Its address taken once: in a shared library (the Python module, libvolley.so) finding
-  // a thread_local is a call to __tls_get_addr, and GCC repeats the call at every use (once
-  // per ray here) rather than keep the address in a register, unless it cannot see where
-  // the pointer came from.
-  std::vector<Hit>* lists = kept;
-  asm("" : "+r"(lists));
+  std::vector<Hit>* const lists = accel::thread_buffer(kept);
   for (std::size_t first = begin; first < end; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, end - first);
     for (std::size_t i = 0; i < n; ++i) lists[i].clear();
@@ -155,7 +150,8 @@ void Accel::contains(const float* xyz, std::size_t count, std::uint8_t* inside, 
   // origin, so runs of 16 go as packets (the stream policy) through the same nodes.
   const std::vector<std::uint32_t> order = morton_order(xyz, count);
   for_chunks("contains", count, threads, [&](std::size_t b, std::size_t e) {
-    thread_local std::vector<Ray> rays;
+    thread_local std::vector<Ray> kept;
+    std::vector<Ray>& rays = *accel::thread_buffer(&kept);
     rays.clear();
     for (std::size_t k = b; k < e; ++k) rays.push_back(contains_ray(xyz + 3 * std::size_t{order[k]}));
     for_runs(*impl_, rays.data(), 0, rays.size(), [&](std::size_t i, const std::vector<Hit>& hits) {

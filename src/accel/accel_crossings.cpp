@@ -6,13 +6,15 @@
 #include <cmath>
 
 #include "accel/accel_impl.h"
+#include "accel/parallel.h"
 
 namespace volley {
 namespace {
 
 /// The hits of one ray, in a buffer each thread keeps (no allocation per ray).
 std::vector<Hit>& scratch() {
-  thread_local std::vector<Hit> hits;
+  thread_local std::vector<Hit> kept;
+  std::vector<Hit>& hits = *accel::thread_buffer(&kept);
   hits.clear();
   return hits;
 }

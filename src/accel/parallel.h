@@ -11,6 +11,16 @@
 
 namespace volley::accel {
 
+/// `p` (the address of a thread's buffer, a thread_local), once. In a shared library (the
+/// Python module, libvolley.so) finding a thread_local is a call to __tls_get_addr, and GCC
+/// repeats that call at every use (for every ray of a loop) rather than keep the address in
+/// a register, unless it cannot tell where the pointer came from.
+template <class T>
+T* thread_buffer(T* p) {
+  asm("" : "+r"(p));
+  return p;
+}
+
 /// An arena of `threads` slots for the calling thread, made at its first use and kept until
 /// the thread ends: a batch call that made its own arena woke and joined its workers anew
 /// each time (perf/rays.md, "16 threads"). Per calling thread, so that two callers asking
