@@ -158,17 +158,6 @@ const Accel& RaycastingScene::committed() {
   return accel_;
 }
 
-void RaycastingScene::normal_of(const Hit& h, float* n) const {
-  // Open3D's convention: zeros for a miss (and, as its cross products give, a degenerate
-  // triangle); the normal itself from the Accel, which also knows loaded scenes, polygons
-  // and instances.
-  n[0] = n[1] = n[2] = 0.0f;
-  if (!h.hit()) return;
-  const std::array<float, 3> g = accel_.geometric_normal(h);
-  if (std::isnan(g[0])) return;
-  n[0] = g[0], n[1] = g[1], n[2] = g[2];
-}
-
 py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
   const RaysIn in = rays_in(rays, nthreads);
   const std::vector<py::ssize_t>& lead = in.lead;
@@ -259,18 +248,25 @@ py::dict RaycastingScene::compute_closest_points(const py::handle& points, int n
   const FloatArray p = as_float_rows(points, "query_points", 3, lead);
   const Accel& accel = committed();
   const std::size_t n = rows_of(lead);
-  std::vector<ClosestPoint> cp(n);
-  {
-    py::gil_scoped_release free;
-    accel.closest_points(p.data(), n, cp.data(), kInf, nthreads);
-  }
   auto pts = new_array<float>(lead, {3}), uvs = new_array<float>(lead, {2}), normals = new_array<float>(lead, {3});
   auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) pts.mutable_data()[3 * i + k] = cp[i].found() ? cp[i].point[k] : kInf;
-    uvs.mutable_data()[2 * i] = cp[i].u, uvs.mutable_data()[2 * i + 1] = cp[i].v;
-    geometry_ids.mutable_data()[i] = cp[i].geom, primitive_ids.mutable_data()[i] = cp[i].prim;
-    normal_of(Hit{cp[i].distance, cp[i].u, cp[i].v, cp[i].prim, cp[i].geom}, normals.mutable_data() + 3 * i);
+  float *pp = pts.mutable_data(), *puv = uvs.mutable_data(), *pn = normals.mutable_data();
+  std::uint32_t *pg = geometry_ids.mutable_data(), *pprim = primitive_ids.mutable_data();
+  {
+    py::gil_scoped_release free;
+    std::vector<ClosestPoint> cp(n);
+    accel.closest_points(p.data(), n, cp.data(), kInf, nthreads);
+    std::vector<Hit> hits(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) pp[3 * i + k] = cp[i].found() ? cp[i].point[k] : kInf;
+      puv[2 * i] = cp[i].u, puv[2 * i + 1] = cp[i].v;
+      pg[i] = cp[i].geom, pprim[i] = cp[i].prim;
+      hits[i] = Hit{cp[i].distance, cp[i].u, cp[i].v, cp[i].prim, cp[i].geom};
+    }
+    // Open3D's convention: zeros for the normal of nothing found (and, as its cross
+    // products give, of a degenerate triangle).
+    accel.geometric_normals(hits.data(), n, pn, nthreads);
+    for (std::size_t i = 0; i < 3 * n; ++i) pn[i] = std::isnan(pn[i]) ? 0.0f : pn[i];
   }
   py::dict out;
   out["points"] = pts, out["geometry_ids"] = geometry_ids, out["primitive_ids"] = primitive_ids;

@@ -58,8 +58,6 @@ class RaycastingScene {
   };
   /// The Accel, committed with the options (after a change: built, or refitted).
   const Accel& committed();
-  /// The unit normal of a hit's triangle (through its instance), or NaN when unknown.
-  void normal_of(const Hit& h, float* n) const;
   void require_geometry(const char* caller, std::uint32_t geometry) const;
 
   Options options_;

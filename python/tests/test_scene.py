@@ -98,6 +98,12 @@ def test_points_distances_and_occupancy():
     np.testing.assert_allclose(c["points"][1], [1, 0.5, 0.5])
     np.testing.assert_allclose(c["primitive_normals"][1], [1, 0, 0], atol=1e-6)
     assert c["geometry_ids"].tolist() == [0, 0, 0, 0]
+    many = np.repeat(pts, 5000, axis=0)  # normals of a batch on threads: those of the small call
+    np.testing.assert_array_equal(s.compute_closest_points(many, nthreads=2)["primitive_normals"],
+                                  np.repeat(c["primitive_normals"], 5000, axis=0))
+    nothing = volley.RaycastingScene().compute_closest_points(pts[:1])  # an empty scene finds nothing
+    assert np.isinf(nothing["points"]).all() and nothing["primitive_ids"][0] == volley.INVALID_ID
+    np.testing.assert_array_equal(nothing["primitive_normals"], [[0, 0, 0]])
     for n in (1, 2, 3):
         np.testing.assert_array_equal(s.compute_distance(pts, nthreads=n), s.compute_distance(pts))
 
