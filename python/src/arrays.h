@@ -36,6 +36,33 @@ void release_buffer(void* data);
 /// (perf/queries.md: a fifth of cast_rays' time on 1M rays).
 inline constexpr std::size_t kReusedBytes = std::size_t{1} << 20;
 
+/// Scratch memory for `count` objects of an implicit-lifetime type T (contents undefined):
+/// from take_buffer when large, so that a repeated call reuses pages instead of faulting in
+/// fresh ones, else from the heap.
+template <class T>
+class Scratch {
+ public:
+  explicit Scratch(std::size_t count) : bytes_(count * sizeof(T)) {
+    if (bytes_ >= kReusedBytes) {
+      data_ = static_cast<T*>(take_buffer(bytes_));
+    } else {
+      small_.resize(count);
+      data_ = small_.data();
+    }
+  }
+  ~Scratch() {
+    if (bytes_ >= kReusedBytes) release_buffer(data_);
+  }
+  Scratch(const Scratch&) = delete;
+  Scratch& operator=(const Scratch&) = delete;
+  T* data() { return data_; }
+
+ private:
+  std::size_t bytes_;
+  T* data_ = nullptr;
+  std::vector<T> small_;
+};
+
 /// A new array of `leading` + `tail` dimensions (contents undefined).
 template <class T>
 py::array_t<T> new_array(const std::vector<py::ssize_t>& leading, std::initializer_list<py::ssize_t> tail = {}) {

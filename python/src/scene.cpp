@@ -254,19 +254,22 @@ py::dict RaycastingScene::compute_closest_points(const py::handle& points, int n
   std::uint32_t *pg = geometry_ids.mutable_data(), *pprim = primitive_ids.mutable_data();
   {
     py::gil_scoped_release free;
-    std::vector<ClosestPoint> cp(n);
-    accel.closest_points(p.data(), n, cp.data(), kInf, nthreads);
-    std::vector<Hit> hits(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (int k = 0; k < 3; ++k) pp[3 * i + k] = cp[i].found() ? cp[i].point[k] : kInf;
-      puv[2 * i] = cp[i].u, puv[2 * i + 1] = cp[i].v;
-      pg[i] = cp[i].geom, pprim[i] = cp[i].prim;
-      hits[i] = Hit{cp[i].distance, cp[i].u, cp[i].v, cp[i].prim, cp[i].geom};
-    }
-    // Open3D's convention: zeros for the normal of nothing found (and, as its cross
-    // products give, of a degenerate triangle).
-    accel.geometric_normals(hits.data(), n, pn, nthreads);
-    for (std::size_t i = 0; i < 3 * n; ++i) pn[i] = std::isnan(pn[i]) ? 0.0f : pn[i];
+    Scratch<ClosestPoint> scratch(n);
+    ClosestPoint* cp = scratch.data();
+    accel.closest_points(p.data(), n, cp, kInf, nthreads);
+    parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+      Hit hits[kPiece];
+      for (std::size_t i = b; i < e; ++i) {
+        for (int k = 0; k < 3; ++k) pp[3 * i + k] = cp[i].found() ? cp[i].point[k] : kInf;
+        puv[2 * i] = cp[i].u, puv[2 * i + 1] = cp[i].v;
+        pg[i] = cp[i].geom, pprim[i] = cp[i].prim;
+        hits[i - b] = Hit{cp[i].distance, cp[i].u, cp[i].v, cp[i].prim, cp[i].geom};
+      }
+      // Open3D's convention: zeros for the normal of nothing found (and, as its cross
+      // products give, of a degenerate triangle).
+      accel.geometric_normals(hits, e - b, pn + 3 * b);
+      for (std::size_t i = 3 * b; i < 3 * e; ++i) pn[i] = std::isnan(pn[i]) ? 0.0f : pn[i];
+    });
   }
   py::dict out;
   out["points"] = pts, out["geometry_ids"] = geometry_ids, out["primitive_ids"] = primitive_ids;
