@@ -50,6 +50,9 @@ inline std::string bytes_of(const std::filesystem::path& p) {
   return std::string(std::istreambuf_iterator<char>(f), {});
 }
 
+/// The Cornell box scene of scenes/: the CLI tests' usual scene.
+inline const std::string kCornell = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
+
 inline bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// The parsed `NAME: key=value ...` line (trace, query).

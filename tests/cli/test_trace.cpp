@@ -22,6 +22,7 @@ using namespace volley;
 namespace {
 
 using test::has;
+using test::kCornell;
 using test::Run;
 using test::run;
 using test::temp_file;
@@ -29,7 +30,6 @@ using test::temp_path;
 using test::trace_line;
 using test::bytes_of;
 
-const std::string kCornell = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
 
 }  // namespace
 
@@ -90,7 +90,7 @@ TEST_CASE("trace: every mode and thread count gives the same answers, and the li
 }
 
 TEST_CASE("trace --count on the stream API and --normals: the same answers as single rays, bad pairs refused") {
-  const std::string scene = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
+  const std::string& scene = kCornell;
   const fs::path rays = temp_path("count_modes.vray");
   REQUIRE(run("rays " + scene + " --workload diffuse --width 40 --height 30 -o " + rays.string()).status == 0);
   const fs::path single = temp_path("count_single.vcnt");
@@ -195,7 +195,7 @@ TEST_CASE("trace and rays: bad input gives a clear message and a non-zero exit")
 }
 
 TEST_CASE("trace --quality high: the same hit and crossing files as medium, info names it, a bad name is refused") {
-  const std::string scene = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
+  const std::string& scene = kCornell;
   const fs::path rays = temp_path("quality.vray");
   REQUIRE(run("rays " + scene + " --workload diffuse --width 40 --height 30 -o " + rays.string()).status == 0);
   for (const std::string query : {"", " --occluded", " --count"}) {

@@ -23,13 +23,13 @@ using namespace volley;
 namespace {
 
 using test::has;
+using test::kCornell;
 using test::Run;
 using test::run;
 using test::temp_file;
 using test::temp_path;
 using test::bytes_of;
 
-const std::string kCornell = std::string(VOLLEY_SOURCE_DIR) + "/scenes/cornell.json";
 
 // A 20 x 20 floor at y = 0 seen from above, a light over it: every primary ray hits and
 // the shading normal is +y everywhere.
