@@ -80,6 +80,7 @@ std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
 
 void Accel::geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads) const {
   if (!impl_->committed) throw Error("geometric_normals: call commit() after adding geometry");
+  if (count > 0 && (!hits || !xyz)) throw Error("geometric_normals: hits or xyz is null with count > 0");
   const Impl& im = *impl_;
   auto normals = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {

@@ -353,6 +353,8 @@ TEST_CASE("geometric_normal: triangles as added, polygons, instances under the i
   }
   CHECK_THROWS_WITH_AS(a.geometric_normals(many.data(), many.size(), spread.data(), -1), doctest::Contains("threads"),
                        volley::Error);
+  CHECK_THROWS_WITH_AS(a.geometric_normals(nullptr, 3, spread.data()), doctest::Contains("null"), volley::Error);
+  a.geometric_normals(nullptr, 0, nullptr);  // nothing to do
   float none[3];
   CHECK_THROWS_AS(Accel().geometric_normals(&cases[0].second, 1, none), volley::Error);  // not committed
   fs::remove(file);
