@@ -95,8 +95,7 @@ typedef enum volley_isa {
   VOLLEY_ISA_AVX512 = 4  /**< AVX-512 F/DQ/BW/VL, 16 lanes */
 } volley_isa;
 
-/** BVH build quality, fixed at commit (same as volley::BuildQuality; the values are
- *  Embree's RTC_BUILD_QUALITY_MEDIUM and _HIGH). */
+/** BVH build quality, fixed at commit (volley::BuildQuality; Embree's values). */
 typedef enum volley_build_quality {
   VOLLEY_BUILD_QUALITY_MEDIUM = 1, /**< binned SAH: fast to build (default) */
   VOLLEY_BUILD_QUALITY_HIGH = 2    /**< also spatial splits (SBVH): slower to build, fewer nodes per ray where
@@ -417,19 +416,17 @@ VOLLEY_API void volley_reset_hits16(volley_hit_packet16* hits);
 VOLLEY_API volley_status volley_intersect_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                                  volley_hit* hits);
 
-/** Occlusion of `count` rays: occluded[i] = 1 when rays[i] is blocked, else 0. As
- *  volley_intersect_stream otherwise. */
+/** Occlusion of `count` rays: occluded[i] = 1 when blocked, else 0; as volley_intersect_stream. */
 VOLLEY_API volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                                 uint8_t* occluded);
 
 /** The unit geometric normal of the primitive `hit` names, in the scene's space (through
  *  the hit's instance): normalize((p1 - p0) x (p2 - p0)) for a triangle as added (Embree's
  *  Ng, normalized), the right-hand-rule normal of a polygon. NaN in every component for a
- *  miss or a hit naming nothing in this scene. Errors: VOLLEY_ERROR_INVALID_ARGUMENT (NULL
- *  argument), VOLLEY_ERROR_NOT_COMMITTED. */
+ *  miss or a hit naming nothing in this scene. volley_geometric_normals: the same for
+ *  `count` hits, three floats each. Errors: VOLLEY_ERROR_INVALID_ARGUMENT (a NULL argument,
+ *  a NULL array with count > 0), VOLLEY_ERROR_NOT_COMMITTED. */
 VOLLEY_API volley_status volley_geometric_normal(const volley_scene* scene, const volley_hit* hit, float normal[3]);
-/** volley_geometric_normal for `count` hits, three floats each into `normals`. Errors:
- *  VOLLEY_ERROR_INVALID_ARGUMENT (NULL array with count > 0), VOLLEY_ERROR_NOT_COMMITTED. */
 VOLLEY_API volley_status volley_geometric_normals(const volley_scene* scene, const volley_hit* hits, size_t count,
                                                   float* normals);
 
