@@ -33,8 +33,8 @@ void parallel(std::size_t n, int nthreads, Body&& body) {
   accel::for_chunks("nthreads", n, n <= kPiece ? 1 : nthreads, pieces, kPiece);
 }
 
-/// Rays [b, b + m) of `rows` (m <= kGroup) as volley's rays over [tnear, tfar), into
-/// `out`; the rows a few groups on are asked for from memory meanwhile.
+/// Rays [b, b + m) of `rows` as volley's rays over [tnear, tfar), into `out`; the rows a
+/// few groups on are asked for from memory meanwhile.
 void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out);
 
 /// Ends a piece's writes: the streamed answers visible to every thread before Python sees them.

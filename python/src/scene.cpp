@@ -12,14 +12,6 @@
 namespace volley::python {
 namespace {
 
-/// Open3D's rays (ox oy oz dx dy dz per row) as volley's over [tnear, tfar): all of them,
-/// for the queries whose C++ form takes the whole batch.
-std::vector<Ray> to_rays(const float* r, std::size_t n, float tnear, float tfar) {
-  std::vector<Ray> out(n);
-  for (std::size_t i = 0; i < n; ++i, r += 6) out[i] = Ray{{r[0], r[1], r[2]}, tnear, {r[3], r[4], r[5]}, tfar};
-  return out;
-}
-
 void check_threads(int nthreads) {
   if (nthreads < 0) throw py::value_error("nthreads: expected 0 (all cores) or a positive count, got " + std::to_string(nthreads));
 }
@@ -222,7 +214,8 @@ py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthread
   HitLists lists;
   {
     py::gil_scoped_release free;
-    const std::vector<Ray> all = to_rays(in.rows.data(), n, 0.0f, kInf);
+    std::vector<Ray> all(n);  // the whole batch: intersect_all's C++ form takes it at once
+    group_rays(in.rows.data(), n, 0, n, 0.0f, kInf, all.data());
     lists = accel.intersect_all(all.data(), n, nthreads);
   }
   const auto k = static_cast<py::ssize_t>(lists.hits.size());
