@@ -229,27 +229,9 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
   }
 }
 
-namespace {
-
-/// An instance met by fewer lanes than this goes lane by lane through the prototype: the
-/// prototype's packet walk hands most of a partial packet's lanes to single rays anyway
-/// (packets from 4 or 8 lanes on were slower than from 16: perf/instances.md).
-constexpr int kFewLanes = 16;
-
-/// The lanes of `world` in an instance's object space (all 16, as to_object each), lane
-/// i's upper end bound[i].
-void to_object(const float (&m)[4][4], const RayPacket<16>& world, const float* bound, std::uint32_t lanes,
-               RayPacket<16>& out) {
-  for (int i = 0; i < 16; ++i) {
-    const Ray r = to_object(m, accel::lane_ray(world, i), bound[i]);
-    out.ox[i] = r.org[0], out.oy[i] = r.org[1], out.oz[i] = r.org[2];
-    out.dx[i] = r.dir[0], out.dy[i] = r.dir[1], out.dz[i] = r.dir[2];
-    out.tmin[i] = r.tmin, out.tmax[i] = r.tmax;
-  }
-  out.active = lanes;
-}
-
-}  // namespace
+// Packets: the top level is walked by the packet, and the lanes that reach an instance go
+// through its prototype one by one (querying the prototype as a packet when all 16 lanes
+// reached it was 3-5% slower on Zen 5, no faster on Sapphire Rapids: perf/instances.md).
 
 void Accel::Impl::intersect_instances(RayPacket<16>& world, const std::uint32_t* masks, HitPacket<16>& hits) const {
   const std::uint32_t active = world.active;
@@ -271,24 +253,11 @@ void Accel::Impl::intersect_instances(RayPacket<16>& world, const std::uint32_t*
         set_hit(hits, i, h);
         found |= 1u << i;
       };
-      if (__builtin_popcount(in_lanes) < kFewLanes) {
-        for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
-          const int i = __builtin_ctz(b);
-          const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
-          const Hit h = in.prototype->intersect(local, masks ? masks[i] : kMaskAll);
-          if (h.hit()) keep(i, h);
-        }
-        return found;
-      }
-      RayPacket<16> local;
-      to_object(in.object_columns, world, bound, in_lanes, local);
-      HitPacket<16> h;
-      reset(h);
-      in.prototype->intersect(local, h, masks);
       for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
         const int i = __builtin_ctz(b);
-        const Hit x = hit_of(h, i);
-        if (x.hit()) keep(i, x);
+        const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
+        const Hit h = in.prototype->intersect(local, masks ? masks[i] : kMaskAll);
+        if (h.hit()) keep(i, h);
       }
       return found;
     };
@@ -305,18 +274,13 @@ std::uint32_t Accel::Impl::occluded_instances(RayPacket<16>& world, const std::u
     world.active = lanes;
     auto leaf = [&](std::uint32_t k, std::uint32_t in_lanes, float* bound) {
       const InstanceSlot& in = l.instances[k];
-      if (__builtin_popcount(in_lanes) < kFewLanes) {
-        std::uint32_t found = 0;
-        for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
-          const int i = __builtin_ctz(b);
-          const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
-          if (in.prototype->occluded(local, masks ? masks[i] : kMaskAll)) found |= 1u << i;
-        }
-        return found;
+      std::uint32_t found = 0;
+      for (std::uint32_t b = in_lanes; b != 0; b &= b - 1) {
+        const int i = __builtin_ctz(b);
+        const Ray local = to_object(in.object_columns, accel::lane_ray(world, i), bound[i]);
+        if (in.prototype->occluded(local, masks ? masks[i] : kMaskAll)) found |= 1u << i;
       }
-      RayPacket<16> local;
-      to_object(in.object_columns, world, bound, in_lanes, local);
-      return in.prototype->occluded(local, masks) & in_lanes;
+      return found;
     };
     blocked |= l.instance_tree.walk_packet(simd::InstanceWalk::any, world, leaf);
   }

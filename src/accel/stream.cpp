@@ -25,10 +25,12 @@ bool same_octant(const Ray* rays, std::size_t n) {
 /// (Accel::Impl::stream_packets), and one octant, or on AVX-512 any octants where the walk
 /// needs no order (occlusion, every hit): closest-hit runs of mixed octants (diffuse rays)
 /// went faster ray by ray there too, occlusion runs straddling an axis plane (shadow rays)
-/// as packets (perf/rays.md).
+/// as packets (perf/rays.md). Scenes with instances: any octants, since the packet shares
+/// the top level's walk (perf/instances.md).
 template <class Impl>
 bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered) {
-  return n == 16 && impl.stream_packets && ((impl.isa == Isa::avx512 && !ordered) || same_octant(rays, n));
+  return n == 16 && impl.stream_packets &&
+         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || same_octant(rays, n));
 }
 
 }  // namespace
