@@ -1,4 +1,5 @@
-// The frustum walk of a coherent packet (one octant, one origin): one interval slab test
+// The frustum walk of a coherent packet (one octant; one origin, or origins that differ
+// where the query asks, PacketWalk::spread_frustum): one interval slab test
 // per node for the whole packet, the oracle's per-lane test at leaves, whose triangles go
 // to the query (queries.h).
 #pragma once

@@ -71,7 +71,11 @@ namespace detail {
 enum class PacketWalk : std::uint32_t {
   mixed_octants = 0,  ///< the per-lane walk, each lane ordering children by its own octant
   one_octant = 1,     ///< the per-lane walk, one near-to-far order for the whole packet
-  frustum = 3,        ///< one octant, one origin, no zero direction component: the frustum walk
+  /// One octant, no zero direction component, origins that differ: the frustum walk's
+  /// interval test holds (it bounds the origins too) but is taken only where a query asks
+  /// for it (Query::kSpreadFrustum: instance top levels); otherwise as one_octant.
+  spread_frustum = 2,
+  frustum = 3,  ///< one octant, one origin, no zero direction component: the frustum walk
 };
 
 /// What the single-ray entry learns of a ray before its walk (WideKernels::prepare_single).
@@ -208,7 +212,8 @@ struct WideKernels {
   /// zero direction component (screen() says so); taken only for packets whose lanes share
   /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
   /// hit points) the interval frustum grows loose and the per-lane walk is faster
-  /// (perf/traversal.md). Returns the lanes the query finished.
+  /// (perf/traversal.md), but for an instance top level (Query::kSpreadFrustum) it is taken
+  /// for spread origins too. Returns the lanes the query finished.
   template <class Query, class Leaves>
   static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                      const detail::PacketSetup<K>& setup, Query& query);

@@ -20,9 +20,11 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
   screen(prep.rays, setup);
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  if (setup.walk == detail::PacketWalk::frustum) return trace_frustum(bvh, prep, setup, query);
-  return setup.walk == detail::PacketWalk::one_octant ? trace_packet<Query, true>(bvh, prep, setup, query)
-                                                      : trace_packet<Query, false>(bvh, prep, setup, query);
+  if (setup.walk == detail::PacketWalk::frustum ||
+      (setup.walk == detail::PacketWalk::spread_frustum && detail::spread_frustum<Query>()))
+    return trace_frustum(bvh, prep, setup, query);
+  return setup.walk == detail::PacketWalk::mixed_octants ? trace_packet<Query, false>(bvh, prep, setup, query)
+                                                         : trace_packet<Query, true>(bvh, prep, setup, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>
@@ -109,8 +111,10 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
   rays.active = valid;
   setup.valid = valid;
   const bool one_octant = (negx == 0 || negx == valid) && (negy == 0 || negy == valid) && (negz == 0 || negz == valid);
-  setup.walk = one_octant ? (zeros == 0 && other_origin == 0 ? detail::PacketWalk::frustum : detail::PacketWalk::one_octant)
-                          : detail::PacketWalk::mixed_octants;
+  setup.walk = !one_octant     ? detail::PacketWalk::mixed_octants
+               : zeros != 0        ? detail::PacketWalk::one_octant
+               : other_origin == 0 ? detail::PacketWalk::frustum
+                                   : detail::PacketWalk::spread_frustum;
 }
 
 }  // namespace volley::simd

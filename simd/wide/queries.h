@@ -36,6 +36,16 @@ namespace volley::simd {
 
 namespace detail {
 
+/// Whether packets of one octant whose origins differ take the frustum walk under `Query`
+/// (PacketWalk::spread_frustum): only where the query says so (kSpreadFrustum).
+template <class Query>
+constexpr bool spread_frustum() {
+  if constexpr (requires { Query::kSpreadFrustum; })
+    return Query::kSpreadFrustum;
+  else
+    return false;
+}
+
 /// What a single-ray query's leaf action tells the walk.
 enum class LeafStep {
   go_on,     ///< nothing changed
@@ -167,6 +177,11 @@ struct InstancesPacket {
   using B = typename Kernels::Float;
   static constexpr int K = Kernels::K, L = Kernels::L;
   static constexpr bool kNearFirst = !AnyHit;  // any hit: the node's slot order, as AnyHitPacket
+  /// The frustum walk also for spread origins (primary rays from a block of the viewport):
+  /// instance boxes are large next to that spread, +7% on instanced primary rays, shadow
+  /// and diffuse rays unchanged; triangle trees keep the per-lane walk for such packets,
+  /// which the frustum lost to on the kitchen and inside small instances (perf/instances.md).
+  static constexpr bool kSpreadFrustum = true;
   InstancePacketVisit visit;
   std::uint32_t hit = 0;  ///< lanes with a hit so far
 

@@ -137,26 +137,27 @@ volley::simd::detail::PacketWalk screened_walk(const Ray& first) {
 
 TEST_CASE("contract: a rejected first lane does not take the frustum walk's common origin") {
   // One origin for every valid lane: the frustum walk, whatever lane 0 holds
-  // when lane 0 is rejected; a valid lane 0 elsewhere makes the origins differ (one octant).
+  // when lane 0 is rejected; a valid lane 0 elsewhere makes the origins differ (the
+  // frustum walk only where the query asks for spread origins).
   const Ray nan_dir = make_ray({7.0f, -3.0f, 0.5f}, {0.2f, kNaN, -1.0f});
   const Ray inf_org = make_ray({kInf, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   const Ray same = make_ray({1.0f, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   const Ray elsewhere = make_ray({1.5f, 2.0f, 3.0f}, {0.2f, 0.2f, -1.0f});
   using namespace volley::simd;
-  constexpr auto kFrustum = detail::PacketWalk::frustum, kOneOctant = detail::PacketWalk::one_octant;
+  constexpr auto kFrustum = detail::PacketWalk::frustum, kSpread = detail::PacketWalk::spread_frustum;
   if (cpu_has(Isa::sse42)) {
     CHECK(screened_walk<Sse42>(nan_dir) == kFrustum);
     CHECK(screened_walk<Sse42>(inf_org) == kFrustum);
     CHECK(screened_walk<Sse42>(same) == kFrustum);
-    CHECK(screened_walk<Sse42>(elsewhere) == kOneOctant);
+    CHECK(screened_walk<Sse42>(elsewhere) == kSpread);
   }
   if (cpu_has(Isa::avx2)) {
     CHECK(screened_walk<Avx2>(nan_dir) == kFrustum);
-    CHECK(screened_walk<Avx2>(elsewhere) == kOneOctant);
+    CHECK(screened_walk<Avx2>(elsewhere) == kSpread);
   }
   if (cpu_has(Isa::avx512)) {
     CHECK(screened_walk<Avx512>(nan_dir) == kFrustum);
     CHECK(screened_walk<Avx512>(inf_org) == kFrustum);
-    CHECK(screened_walk<Avx512>(elsewhere) == kOneOctant);
+    CHECK(screened_walk<Avx512>(elsewhere) == kSpread);
   }
 }

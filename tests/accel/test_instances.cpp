@@ -124,6 +124,46 @@ TEST_CASE("instances: answers of the flattened scene, every query form, every IS
   }
 }
 
+TEST_CASE("instances: camera packets with spread origins (the top level's frustum walk) answer as single rays") {
+  // Rays as the notes' viewport model makes them (from each pixel of a viewport one unit in
+  // front of the eye), then an orthographic camera's (one direction, origins on a grid: the
+  // walk's interval then rests on the origins' spread alone), 4x4 pixel blocks, so most
+  // packets are of one octant and the top level takes the frustum walk with spread origins.
+  const accel_test::Soup soup = accel_test::random_soup(1500, 93), own = accel_test::random_soup(60, 94);
+  std::vector<Ray> rays, orthographic;
+  const int side = 48;
+  for (int by = 0; by < side; by += 4)
+    for (int bx = 0; bx < side; bx += 4)
+      for (int y = by; y < by + 4; ++y)
+        for (int x = bx; x < bx + 4; ++x) {
+          const glm::vec3 d{0.8f * ((x + 0.5f) / side - 0.5f), 0.8f * ((y + 0.5f) / side - 0.5f), -1.0f};
+          const glm::vec3 o = glm::vec3(3.0f, 2.0f, 120.0f) + d;
+          rays.push_back(Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, INFINITY});
+          const glm::vec3 p{80.0f * ((x + 0.5f) / side - 0.5f), 80.0f * ((y + 0.5f) / side - 0.5f), 120.0f};
+          orthographic.push_back(Ray{{p.x, p.y, p.z}, 0.0f, {0.05f, 0.03f, -1.0f}, INFINITY});
+        }
+  rays.insert(rays.end(), orthographic.begin(), orthographic.end());
+  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
+    if (!volley::simd::cpu_has(isa)) continue;
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel prototype;
+    add_soup(prototype, soup);
+    prototype.commit({TriangleTest::watertight, isa});
+    Accel scene;
+    add_soup(scene, own);
+    for (const std::vector<float>& m : placements()) scene.add_instance(prototype, m.data());
+    scene.commit({TriangleTest::watertight, isa});
+    std::vector<Hit> single(rays.size());
+    int through = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      single[i] = scene.intersect(rays[i]);
+      through += single[i].inst != kInvalidId;
+    }
+    CHECK(through > int(rays.size()) / 8);
+    report(check_forms(scene, rays, single, 23), "camera packets through instances: forms against single rays");
+  }
+}
+
 TEST_CASE("instances: masked packets and streams answer as masked single rays, every ISA") {
   // The packet walk of the top level takes each lane's mask to the layers and the
   // prototypes (partial packets, an instance entered by all 16 lanes or by a few).
