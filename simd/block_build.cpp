@@ -71,7 +71,10 @@ template <TriangleTest Test, int W>
 void pack_blocks(const float* xyz, const std::uint32_t* prim_ids, std::size_t n, BlockFor<Test, W>* out) {
   for (std::size_t b = 0; b < blocks_for<W>(n); ++b) {
     // Every byte written, the struct's tail padding included: `out` may be uninitialised.
-    std::memset(static_cast<void*>(&out[b]), 0, sizeof(out[b]));
+    // (A block without tail padding gets every byte from the lanes below.)
+    using Block = BlockFor<Test, W>;
+    if constexpr (sizeof(Block) != offsetof(Block, prim) + sizeof(Block::prim))
+      std::memset(static_cast<void*>(&out[b]), 0, sizeof(out[b]));
     for (int i = 0; i < W; ++i) {
       const std::size_t t = b * W + static_cast<std::size_t>(i);
       if (t >= n) {
