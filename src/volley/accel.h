@@ -186,8 +186,10 @@ class VOLLEY_API Accel {
   /// consecutive rays (the rest ray by ray). A run whose directions share one octant is
   /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light), others
   /// ray by ray, which was faster for diffuse rays on every ISA (perf/traversal.md,
-  /// perf/rays.md); occlusion streams on AVX-512 trace every run as a packet (shadow rays
-  /// straddling an axis plane gained there). Same answers as intersect(ray) per ray.
+  /// perf/rays.md); occlusion streams on AVX-512, and every stream of a scene with
+  /// instances, trace every run as a packet (shadow rays straddling an axis plane gained on
+  /// AVX-512; with instances a packet shares the top level's walk: perf/instances.md).
+  /// Same answers as intersect(ray) per ray.
   /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
   /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in
   /// pieces of whole runs (at least 1024 rays each), with the same answers. Error for
