@@ -85,7 +85,8 @@ simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of, simd
         const std::uint32_t begin = j == 0 ? 0 : leaf_end[j - 1], end = leaf_end[j];
         // The leaf's box, a vertex per SSE min and max (lane 3, the next float, dropped);
         // operands in BBox::extend's order, so NaN coordinates are ignored as there.
-        __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity()), hi = _mm_sub_ps(_mm_setzero_ps(), lo);
+        constexpr float kInf = std::numeric_limits<float>::infinity();
+        __m128 lo = _mm_set1_ps(kInf), hi = _mm_set1_ps(-kInf);
         for (std::uint32_t f = 9 * begin; f < 9 * end; f += 3) {
           const __m128 v = _mm_loadu_ps(tri_xyz.data() + f);
           lo = _mm_min_ps(v, lo), hi = _mm_max_ps(v, hi);

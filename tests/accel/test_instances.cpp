@@ -44,6 +44,14 @@ std::uint32_t add_soup(Accel& accel, const accel_test::Soup& s) {
   return accel.add_triangles(s.xyz.data(), 3 * s.size(), idx.data(), s.size());
 }
 
+/// A prototype for the instance tests: `soup` committed with the watertight test at `isa`.
+Accel prototype_of(const accel_test::Soup& soup, Isa isa) {
+  Accel prototype;
+  add_soup(prototype, soup);
+  prototype.commit({TriangleTest::watertight, isa});
+  return prototype;
+}
+
 const std::vector<std::vector<float>>& placements() {
   static const std::vector<std::vector<float>> p = {
       transform({1, 1, 1}, 0, {0, 0, 0}),         transform({0.5f, 0.5f, 0.5f}, 30, {25, 0, 0}),
@@ -146,9 +154,7 @@ TEST_CASE("instances: camera packets with spread origins (the top level's frustu
   for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
     if (!volley::simd::cpu_has(isa)) continue;
     CAPTURE(std::string(volley::to_string(isa)));
-    Accel prototype;
-    add_soup(prototype, soup);
-    prototype.commit({TriangleTest::watertight, isa});
+    const Accel prototype = prototype_of(soup, isa);
     Accel scene;
     add_soup(scene, own);
     for (const std::vector<float>& m : placements()) scene.add_instance(prototype, m.data());
@@ -165,15 +171,13 @@ TEST_CASE("instances: camera packets with spread origins (the top level's frustu
 }
 
 TEST_CASE("instances: masked packets and streams answer as masked single rays, every ISA") {
-  // The packet walk of the top level takes each lane's mask to the layers and the
-  // prototypes (partial packets, an instance entered by all 16 lanes or by a few).
+  // The packet walk of the top level takes each lane's mask to the layers and to the
+  // prototypes its lanes reach (full and partial packets).
   const accel_test::Soup soup = accel_test::random_soup(200, 91), own = accel_test::random_soup(60, 92);
   for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
     if (!volley::simd::cpu_has(isa)) continue;
     CAPTURE(std::string(volley::to_string(isa)));
-    Accel prototype;
-    add_soup(prototype, soup);
-    prototype.commit({TriangleTest::watertight, isa});
+    const Accel prototype = prototype_of(soup, isa);
     Accel scene;
     scene.set_geometry_mask(add_soup(scene, own), 0x1);
     std::uint32_t k = 0;
