@@ -33,7 +33,11 @@ namespace volley::simd {
 // Inert children give ±inf products. A child passes when
 // max(near bounds, min tmin) <= min(far bounds, max tfar) * kSlabExitPad, which holds
 // whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
-// exactly, against each lane's own tfar) to pick the lanes handed to the block kernels.
+// exactly, against each lane's own tfar) to pick the lanes handed to the block kernels, and
+// every subtree popped is tested per lane again, against tfar as the hits since its push
+// have left it: a subtree no lane enters is skipped, one that three lanes or fewer enter
+// goes to the single-ray walk lane by lane, as in the per-lane walk. Without that second
+// test the frustum opened twice the leaves on the kitchen's primary rays (perf/traversal.md).
 template <class Arch, TriangleTest Test, bool Robust>
 template <class Query, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
@@ -90,8 +94,36 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
   std::uint32_t finished = 0;
   std::uint32_t cur = bvh.root;
   std::uint32_t cur_lanes = valid;
+  std::uint32_t cur_parent = wide_ref::kEmptyRef, cur_slot = 0;
   for (;;) {
-    if (!(cur & wide_ref::kLeafBit)) {
+    // The lanes that enter `cur` now (each against its own tfar, which hits since the push
+    // may have lowered): none, skip it; few, the single-ray walk takes them from here.
+    std::uint32_t live = cur_lanes & ~finished;
+    if (detail::lanes_on_pop<Query>() && live != 0 && cur_parent != wide_ref::kEmptyRef) {
+      const WideNode<N>& parent = wide_ref::node_at(bvh.nodes, cur_parent);
+      std::uint32_t now = 0;
+      for (int c = 0; c < C; ++c) {
+        B e, x;
+        lanes.slabs(parent, static_cast<int>(cur_slot), np, c, padb, e, x);
+        now |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
+      }
+      live &= now;
+    }
+    if (live == 0) {
+      // Skipped: no lane reaches it any more.
+    } else if (detail::lanes_on_pop<Query>() && std::popcount(live) <= kPacketSwitchLanes) {
+      alignas(64) float far_lanes[K];
+      for (int c = 0; c < C; ++c) lanes.tfar[c].store_aligned(far_lanes + c * L);
+      for (std::uint32_t b = live; b != 0; b &= b - 1) {
+        const int i = std::countr_zero(b);
+        const Ray r{
+            {rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmax[i]};
+        if (query.single(bvh, r, cur, i, far_lanes[i])) finished |= 1u << i;
+      }
+      for (int c = 0; c < C; ++c) lanes.tfar[c] = B::load_aligned(far_lanes + c * L);
+      if (finished == valid) return finished;
+      far_hi = lanes.far_max();
+    } else if (!(cur & wide_ref::kLeafBit)) {
       // Interior: the interval slab test of all eight children.
       const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
       const auto dnx = V8::sub(V8::load(node.bounds[np[0]]), onx);
@@ -131,14 +163,13 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
           }
           int k = size++;
           for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
-          stack[k] = {child, dist[j], live};
+          stack[k] = {child, dist[j], live, cur, static_cast<std::uint32_t>(j)};
         }
       }
     } else {
-      // Leaf: its blocks to the query, for the lanes that entered its box.
+      // Leaf: its blocks to the query, for the lanes that enter its box.
       const std::uint32_t count = wide_ref::leaf_count(cur);
-      const std::uint32_t live = cur_lanes & ~finished;
-      if (count != 0 && live != 0) {
+      if (count != 0) {
         const detail::LanesStep step = query.leaf(prep, bvh.blocks + wide_ref::leaf_first(cur), count, live, lanes.tfar);
         finished |= step.finished;
         if (step.finished != 0 && finished == valid) return finished;
@@ -153,6 +184,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
     }
     cur = stack[size].ref;
     cur_lanes = stack[size].lanes;
+    cur_parent = stack[size].parent;
+    cur_slot = stack[size].slot;
   }
 }
 

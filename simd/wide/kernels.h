@@ -73,7 +73,7 @@ enum class PacketWalk : std::uint32_t {
   one_octant = 1,     ///< the per-lane walk, one near-to-far order for the whole packet
   /// One octant, no zero direction component, origins that differ: the frustum walk's
   /// interval test holds (it bounds the origins too) but is taken only where a query asks
-  /// for it (Query::kSpreadFrustum: instance top levels); otherwise as one_octant.
+  /// for it (Query::kSpreadFrustum: closest hits, instance top levels); otherwise as one_octant.
   spread_frustum = 2,
   frustum = 3,  ///< one octant, one origin, no zero direction component: the frustum walk
 };
@@ -208,12 +208,12 @@ struct WideKernels {
   template <class Query, class Leaves>
   static std::uint32_t trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays, Query& query);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
-  /// packet, per-lane tests only at leaves. Requires every valid lane in one octant with no
-  /// zero direction component (screen() says so); taken only for packets whose lanes share
-  /// one origin (pinhole primary rays): with spread origins (shadow rays from a 4x4 block of
-  /// hit points) the interval frustum grows loose and the per-lane walk is faster
-  /// (perf/traversal.md), but for an instance top level (Query::kSpreadFrustum) it is taken
-  /// for spread origins too. Returns the lanes the query finished.
+  /// packet, per-lane tests at leaves and at each subtree popped. Requires every valid lane
+  /// in one octant with no zero direction component (screen() says so); taken for packets
+  /// whose lanes share one origin (pinhole primary rays), and by closest hits and instance
+  /// top levels (Query::kSpreadFrustum) for origins that differ too; occlusion packets with
+  /// spread origins (shadow rays from a 4x4 block of hit points, whose interval frustum grows
+  /// loose) take the per-lane walk (perf/traversal.md). Returns the lanes the query finished.
   template <class Query, class Leaves>
   static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                      const detail::PacketSetup<K>& setup, Query& query);

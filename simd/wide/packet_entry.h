@@ -20,9 +20,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
   screen(prep.rays, setup);
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
-  if (setup.walk == detail::PacketWalk::frustum ||
-      (setup.walk == detail::PacketWalk::spread_frustum && detail::spread_frustum<Query>()))
-    return trace_frustum(bvh, prep, setup, query);
+  // (A tree that is one leaf gains nothing from the frustum's set-up.)
+  const bool frustum = setup.walk == detail::PacketWalk::frustum ||
+                       (setup.walk == detail::PacketWalk::spread_frustum && detail::spread_frustum<Query>());
+  if (frustum && !(bvh.root & wide_ref::kLeafBit)) return trace_frustum(bvh, prep, setup, query);
   return setup.walk == detail::PacketWalk::mixed_octants ? trace_packet<Query, false>(bvh, prep, setup, query)
                                                          : trace_packet<Query, true>(bvh, prep, setup, query);
 }

@@ -46,6 +46,17 @@ constexpr bool spread_frustum() {
     return false;
 }
 
+/// Whether the frustum walk tests the lanes again at each subtree it pops (skipping it or
+/// handing it to single rays when few lanes enter): unless the query says otherwise
+/// (kLanesOnPop = false).
+template <class Query>
+constexpr bool lanes_on_pop() {
+  if constexpr (requires { Query::kLanesOnPop; })
+    return Query::kLanesOnPop;
+  else
+    return true;
+}
+
 /// What a single-ray query's leaf action tells the walk.
 enum class LeafStep {
   go_on,     ///< nothing changed
@@ -179,9 +190,10 @@ struct InstancesPacket {
   static constexpr bool kNearFirst = !AnyHit;  // any hit: the node's slot order, as AnyHitPacket
   /// The frustum walk also for spread origins (primary rays from a block of the viewport):
   /// instance boxes are large next to that spread, +7% on instanced primary rays, shadow
-  /// and diffuse rays unchanged; triangle trees keep the per-lane walk for such packets,
-  /// which the frustum lost to on the kitchen and inside small instances (perf/instances.md).
+  /// and diffuse rays unchanged (perf/instances.md). The lanes are not tested again at each
+  /// subtree popped: over the top level's few large boxes that cost 2-4%.
   static constexpr bool kSpreadFrustum = true;
+  static constexpr bool kLanesOnPop = false;
   InstancePacketVisit visit;
   std::uint32_t hit = 0;  ///< lanes with a hit so far
 
@@ -256,6 +268,10 @@ struct ClosestHitPacket {
   using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
   static constexpr bool kNearFirst = true;
+  /// The frustum walk for packets whose origins differ too (primary rays that start on their
+  /// pixels): faster on every scene tried; occlusion keeps the per-lane walk for such
+  /// packets, since shadow rays' origins spread over surfaces (perf/traversal.md).
+  static constexpr bool kSpreadFrustum = true;
   HitPacket<K>& hits;
 
   B bound(int o, B tmax) const { return upper_bound<typename Kernels::Isa>(B::load_aligned(hits.t + o), tmax); }

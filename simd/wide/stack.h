@@ -22,12 +22,16 @@ static_assert(sizeof(WideStackItem<xsimd::avx2>) == 8 && offsetof(WideStackItem<
               "stack_word packs an item as one little-endian 64-bit word");
 
 /// A stack entry of the frustum walk: a subtree, the packet's lower bound of the entry
-/// distances into it, and (leaves) the lanes whose own box test passed.
+/// distances into it, the lanes that may enter it (leaves: those whose own box test
+/// passed at the push), and where its box is (slot `slot` of node `parent`), for the lanes'
+/// test again when it is popped.
 template <class Arch>
 struct FrustumItem {
   std::uint32_t ref;
   float entry;
   std::uint32_t lanes;
+  std::uint32_t parent;
+  std::uint32_t slot;
 };
 
 /// Smallest lane of v (no lane NaN).

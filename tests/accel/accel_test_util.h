@@ -253,13 +253,16 @@ inline VertexAimed lone_triangles_vertex_aimed() {
 /// Rays of every kind the traversals distinguish, in runs of 16: incoherent (mixed
 /// octants: the per-lane packet walk), pinhole 4x4 blocks (one octant: the frustum walk),
 /// axis-aligned blocks (zero components: the per-lane one-octant walk), converging
-/// shadow-like rays with a finite tmax, and runs with NaN / Inf lanes among good ones.
+/// shadow-like rays with a finite tmax, runs with NaN / Inf lanes among good ones, and
+/// camera blocks whose origins differ (the notes' viewport, each ray from its pixel; an
+/// orthographic camera, one direction from a grid of origins: closest hits take the
+/// frustum walk for those too).
 inline std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> pos(-extent, extent), unit(-1.0f, 1.0f);
   std::vector<Ray> rays;
   for (int r = 0; r < runs; ++r) {
-    const int kind = r % 5;
+    const int kind = r % 7;
     const glm::vec3 eye(pos(rng) * 2.0f, pos(rng) * 2.0f, pos(rng) * 2.0f);
     const glm::vec3 look = glm::vec3(pos(rng), pos(rng), pos(rng)) * 0.5f - eye;
     const glm::vec3 u = glm::normalize(glm::cross(look, glm::vec3(0.3f, 1.0f, 0.1f))) * 0.02f * extent;
@@ -274,9 +277,9 @@ inline std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
           rays.push_back(make_ray(eye, look + x * u + y * v));
           break;
         case 2: {
-          const int axis = r / 5 % 3;
+          const int axis = r / 7 % 3;
           glm::vec3 d(0.0f);
-          d[axis] = (r / 15) % 2 ? 1.0f : -1.0f;
+          d[axis] = (r / 21) % 2 ? 1.0f : -1.0f;
           glm::vec3 o(pos(rng), pos(rng), pos(rng));
           o[axis] = -d[axis] * extent * 2.0f;
           rays.push_back(make_ray(o, d));
@@ -288,6 +291,14 @@ inline std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
           rays.push_back(make_ray(o, look * 1.5f + glm::vec3(0, 0.1f * x, 0), 0.0f, 1.0f));
           break;
         }
+        case 5: {
+          const glm::vec3 d = look + x * u + y * v;
+          rays.push_back(make_ray(eye + 0.05f * d, d));
+          break;
+        }
+        case 6:
+          rays.push_back(make_ray(eye + 3.0f * (x * u + y * v), look));
+          break;
         default: {
           Ray ray = make_ray(eye, look + x * u + y * v);
           if (i == 3) ray.dir[1] = kNaN;
