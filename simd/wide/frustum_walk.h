@@ -149,21 +149,21 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
         for (; bits != 0; bits &= bits - 1) {
           const int j = std::countr_zero(bits);
           const std::uint32_t child = node.child[j];
-          std::uint32_t live = valid & ~finished;
+          std::uint32_t child_lanes = valid & ~finished;
           if (child & wide_ref::kLeafBit) {
             // A leaf: the oracle's box test per lane, against each lane's own tfar.
-            live = 0;
+            child_lanes = 0;
             for (int c = 0; c < C; ++c) {
               B e, x;
               lanes.slabs(node, j, np, c, padb, e, x);
-              live |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
+              child_lanes |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
             }
-            live &= valid & ~finished;
-            if (live == 0) continue;
+            child_lanes &= valid & ~finished;
+            if (child_lanes == 0) continue;
           }
           int k = size++;
           for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
-          stack[k] = {child, dist[j], live, cur, static_cast<std::uint32_t>(j)};
+          stack[k] = {child, dist[j], child_lanes, cur, static_cast<std::uint32_t>(j)};
         }
       }
     } else {
