@@ -10,6 +10,7 @@
 #include "simd/wide/point_walk.h"
 #include "simd/wide/queries.h"
 #include "simd/wide/single_walk.h"
+#include "simd/wide/stream_walk.h"
 
 namespace volley::simd {
 

@@ -66,6 +66,17 @@ inline constexpr int kWidePacket = 16;
 /// perf/traversal.md).
 inline constexpr int kPacketSwitchLanes = 3;
 
+/// The stream walk (stream_walk.h) takes a stream this many rays at a time, and hands a
+/// subtree whose list has fewer than kStreamSwitchRays rays to the single-ray walk.
+#ifndef EXP_STREAM_BATCH
+#define EXP_STREAM_BATCH 4096
+#endif
+#ifndef EXP_STREAM_SWITCH
+#define EXP_STREAM_SWITCH 16
+#endif
+inline constexpr std::size_t kStreamBatch = EXP_STREAM_BATCH;
+inline constexpr std::uint32_t kStreamSwitchRays = EXP_STREAM_SWITCH;
+
 namespace detail {
 /// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
 enum class PacketWalk : std::uint32_t {
@@ -166,6 +177,11 @@ struct WideKernels {
   /// The active lanes of `rays` that some triangle occludes (tmin <= t < tmax), as a mask.
   static std::uint32_t occluded(const View& bvh, const RayPacket<K>& rays);
 
+  /// Streams (stream_walk.h): blocked[i] = 1 when some triangle occludes rays[i], else 0;
+  /// the closest hit of each ray into hits[i] (hits[i].t on entry bounds its search).
+  static void occluded(const View& bvh, const Ray* rays, std::size_t count, std::uint8_t* blocked);
+  static void intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits);
+
   /// Single-ray traversal of the subtree `start` for `query` (queries.h: ClosestHitRay,
   /// AnyHitRay): returns query.answer(). The packet walks' fallback, and the entry of every
   /// single-ray query.
@@ -200,6 +216,9 @@ struct WideKernels {
   [[gnu::always_inline]] inline static void walk(const WideView<Leaves>& bvh, const PreparedRay& ray, __m128 inv,
                                                  std::uint32_t start, Query& query);
 
+  /// The stream walk of rays[0 .. n) (n <= kStreamBatch) for a stream query (queries.h).
+  template <class Query>
+  static void trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query);
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
   /// The start of every packet query: screens the packet, prepares it for the triangle

@@ -81,20 +81,18 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
     }
     if (bits != 0) {
       if (!(cur & wide_ref::kLeafBit)) {
-        // Interior: each child against the active lanes; keep the first-entered child as the
-        // next `cur`, push the others.
+        // Interior: every used child against the active lanes first, then the entered ones
+        // in slot order: the first-entered child is the next `cur`, the others pushed. The
+        // tests carry no branch on their outcome, which the predictor cannot guess.
         const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
-        std::uint32_t next = wide_ref::kEmptyRef;
-        B next_dist[C];
-        for (int c = 0; c < C; ++c) next_dist[c] = B(kNaN);
+        B dist[N][C];
+        std::uint32_t entered = 0;
+#pragma GCC unroll 8
         for (int j = 0; j < N; ++j) {
-          const std::uint32_t child = node.child[j];
-          if (child == wide_ref::kEmptyRef) break;  // used children come first
-          B dist[C];
           bool any = false;
           for (int c = 0; c < C; ++c) {
             if (!xsimd::any(act[c])) {
-              dist[c] = B(kNaN);
+              dist[j][c] = B(kNaN);
               continue;
             }
             B entry(0.0f), exit(0.0f);  // set below
@@ -114,29 +112,35 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
               exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
             }
             const M hit = act[c] & (entry <= exit);
-            dist[c] = xsimd::select(hit, entry, B(kNaN));
-            any = any || xsimd::any(hit);
+            dist[j][c] = xsimd::select(hit, entry, B(kNaN));
+            any |= xsimd::any(hit);
           }
-          if (!any) continue;
+          entered |= static_cast<std::uint32_t>(any) << j;
+        }
+        std::uint32_t next = wide_ref::kEmptyRef;
+        B next_dist[C];
+        for (; entered != 0; entered &= entered - 1) {
+          const int j = std::countr_zero(entered);
+          const std::uint32_t child = node.child[j];
           if (next == wide_ref::kEmptyRef) {
             next = child;
-            for (int c = 0; c < C; ++c) next_dist[c] = dist[c];
+            for (int c = 0; c < C; ++c) next_dist[c] = dist[j][c];
             continue;
           }
           bool nearer = false;
           if constexpr (Query::kNearFirst)
-            for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
+            for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[j][c] < next_dist[c]);
           float* slot = stack_dist[size];
           if (nearer) {
             stack_ref[size++] = next;
             for (int c = 0; c < C; ++c) {
               next_dist[c].store_aligned(slot + c * L);
-              next_dist[c] = dist[c];
+              next_dist[c] = dist[j][c];
             }
             next = child;
           } else {
             stack_ref[size++] = child;
-            for (int c = 0; c < C; ++c) dist[c].store_aligned(slot + c * L);
+            for (int c = 0; c < C; ++c) dist[j][c].store_aligned(slot + c * L);
           }
         }
         if (next != wide_ref::kEmptyRef) {

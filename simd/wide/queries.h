@@ -375,6 +375,52 @@ struct AnyHitPacket {
   }
 };
 
+/// Any hit of each ray of a stream (stream_walk.h): blocked[i] = 1 at ray i's first hit,
+/// its upper end then -inf (finished).
+template <class Kernels>
+struct AnyHitStream {
+  static constexpr bool kNearFirst = false;
+  static constexpr bool kSureRange = true;
+  std::uint8_t* blocked;
+
+  float bound(std::size_t, const Ray& ray) const { return ray.tmax; }
+  [[gnu::always_inline]] void leaf(std::uint32_t i, const PreparedRay& pr, const typename Kernels::Block* blocks,
+                                   std::uint32_t count, float& far) {
+    AnyHitRay<Kernels> q;
+    if (q.leaf(pr, blocks, count, far) == LeafStep::done) finish(i, far);
+  }
+  void single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, std::uint32_t i, float& far) {
+    AnyHitRay<Kernels> q;
+    if (Kernels::trace_single(bvh, ray, start, q)) finish(i, far);
+  }
+
+ private:
+  void finish(std::uint32_t i, float& far) {
+    blocked[i] = 1;
+    far = -std::numeric_limits<float>::infinity();
+  }
+};
+
+/// Closest hit of each ray of a stream (stream_walk.h): hits[i] as ClosestHitRay's, the
+/// ray's upper end lowered to it.
+template <class Kernels>
+struct ClosestHitStream {
+  static constexpr bool kNearFirst = true;
+  static constexpr bool kSureRange = false;
+  Hit* hits;
+
+  float bound(std::size_t i, const Ray& ray) const { return hits[i].t < ray.tmax ? hits[i].t : ray.tmax; }
+  [[gnu::always_inline]] void leaf(std::uint32_t i, const PreparedRay& pr, const typename Kernels::Block* blocks,
+                                   std::uint32_t count, float& far) {
+    ClosestHitRay<Kernels> q{hits[i]};
+    q.leaf(pr, blocks, count, far);
+  }
+  void single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, std::uint32_t i, float& far) {
+    ClosestHitRay<Kernels> q{hits[i]};
+    if (Kernels::trace_single(bvh, ray, start, q)) far = hits[i].t;
+  }
+};
+
 }  // namespace detail
 
 }  // namespace volley::simd

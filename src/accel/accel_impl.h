@@ -228,10 +228,15 @@ struct Accel::Impl {
   void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
   template <int K>
   std::uint32_t occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const;
-  /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays. masks:
-  /// one per ray, or null.
+  /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays, the rest
+  /// by the stream walk where the scene allows it and enough are left, else one by one.
+  /// masks: one per ray, or null.
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
+  /// Whether `rays_left` rays of a stream go to the stream walk (simd/wide/stream_walk.h):
+  /// a scene that is one wide BVH (wide_only) and at least kStreamWalkRays of them.
+  bool stream_walk_for(std::size_t rays_left) const;
+  static constexpr std::size_t kStreamWalkRays = 256;
   AccelInfo info() const;
   /// Every hit of the layers `mask` selects, instances included, appended to `out`
   /// attributed (geom, prim, inst) in no particular order (accel_crossings.cpp).

@@ -2,6 +2,7 @@
 // volley/accel.h), the rest one by one.
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "accel/accel_impl.h"
 
@@ -33,9 +34,28 @@ bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered) {
          (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || same_octant(rays, n));
 }
 
+/// The rays of a stream left to the stream walk, copied together (thread_local, reused).
+struct Leftover {
+  std::vector<std::uint32_t> index;  ///< their places in the caller's stream
+  std::vector<Ray> rays;
+  std::vector<Hit> hits;
+  std::vector<std::uint8_t> blocked;
+};
+
+Leftover& leftover() {
+  static thread_local Leftover left;
+  return left;
+}
+
 }  // namespace
 
+bool Accel::Impl::stream_walk_for(std::size_t rays_left) const {
+  return wide_only != nullptr && rays_left >= kStreamWalkRays;
+}
+
 void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
+  Leftover& left = leftover();
+  left.index.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     const std::uint32_t* m = masks ? masks + first : nullptr;
@@ -47,12 +67,34 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
       intersect(p, h, m);
       store(h, hits + first, 16);
     } else {
-      for (std::size_t i = 0; i < n; ++i) hits[first + i] = intersect(rays[first + i], m ? m[i] : kMaskAll);
+      for (std::size_t i = 0; i < n; ++i) left.index.push_back(static_cast<std::uint32_t>(first + i));
     }
+  }
+  if (!stream_walk_for(left.index.size())) {
+    for (std::uint32_t i : left.index) hits[i] = intersect(rays[i], masks ? masks[i] : kMaskAll);
+    return;
+  }
+  // The stream walk, for the rays whose mask meets the scene's (the others miss).
+  left.rays.clear();
+  std::size_t kept = 0;
+  for (std::uint32_t i : left.index) {
+    hits[i] = Hit{};
+    if (masks && !(masks[i] & simple_mask)) continue;
+    left.index[kept++] = i;
+    left.rays.push_back(rays[i]);
+  }
+  left.hits.assign(kept, Hit{});
+  wide_only->intersect(left.rays.data(), kept, left.hits.data());
+  for (std::size_t k = 0; k < kept; ++k) {
+    Hit& h = hits[left.index[k]];
+    h = left.hits[k];
+    attribute(h.prim, h.geom);
   }
 }
 
 void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
+  Leftover& left = leftover();
+  left.index.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     const std::uint32_t* m = masks ? masks + first : nullptr;
@@ -62,9 +104,24 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
       const std::uint32_t mask = occluded(p, m);
       for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
     } else {
-      for (std::size_t i = 0; i < n; ++i) blocked[first + i] = occluded(rays[first + i], m ? m[i] : kMaskAll) ? 1 : 0;
+      for (std::size_t i = 0; i < n; ++i) left.index.push_back(static_cast<std::uint32_t>(first + i));
     }
   }
+  if (!stream_walk_for(left.index.size())) {
+    for (std::uint32_t i : left.index) blocked[i] = occluded(rays[i], masks ? masks[i] : kMaskAll) ? 1 : 0;
+    return;
+  }
+  left.rays.clear();
+  std::size_t kept = 0;
+  for (std::uint32_t i : left.index) {
+    blocked[i] = 0;
+    if (masks && !(masks[i] & simple_mask)) continue;
+    left.index[kept++] = i;
+    left.rays.push_back(rays[i]);
+  }
+  left.blocked.resize(kept);
+  wide_only->occluded(left.rays.data(), kept, left.blocked.data());
+  for (std::size_t k = 0; k < kept; ++k) blocked[left.index[k]] = left.blocked[k];
 }
 
 void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>* out) const {

@@ -76,6 +76,12 @@ class WideAccelFor final : public WideAccel {
     Kernels::intersect(view_, rays, hits);
   }
   std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view_, rays); }
+  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const override {
+    Kernels::occluded(view_, rays, count, blocked);
+  }
+  void intersect(const Ray* rays, std::size_t count, Hit* hits) const override {
+    Kernels::intersect(view_, rays, count, hits);
+  }
   void all_hits(const Ray& ray, std::vector<Hit>& out) const override { Kernels::all_hits(view_, ray, out); }
   WalkCounts walk_counts(const Ray& ray, bool any_hit) const override {
     return Kernels::walk_counts(view_, ray, any_hit);

@@ -80,6 +80,11 @@ class WideAccel {
   virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const = 0;
   /// Mask of the active lanes that something occludes.
   virtual std::uint32_t occluded(const RayPacket<16>& rays) const = 0;
+  /// Streams by the stream walk (simd/wide/stream_walk.h): blocked[i] = 1 when something
+  /// occludes rays[i], else 0; the closest hit of each ray into hits[i] (hits[i].t bounds
+  /// its search).
+  virtual void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const = 0;
+  virtual void intersect(const Ray* rays, std::size_t count, Hit* hits) const = 0;
   /// Every triangle hit with tmin <= t < tmax by the crossing test (the watertight test's
   /// exactly-once rule), appended to `out` in visiting order (prim = the triangle's id).
   virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;

@@ -1,0 +1,209 @@
+// The stream walk: a batch of rays walks the tree together, breadth by node (after
+// Barringer and Akenine-Möller, "Dynamic ray stream traversal", SIGGRAPH 2014). A node
+// takes the list of rays that entered it and splits it by its children's boxes, L rays
+// at a time with the oracle's per-lane test; each child's list is walked in turn, a short
+// one ray by ray by the single-ray walk. For large incoherent batches (bounce and shadow
+// rays handed to the stream API), where packets of neighbours share little.
+#pragma once
+#include <immintrin.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "simd/stream_scratch.h"
+#include "simd/wide/queries.h"
+#include "simd/wide/stack.h"
+
+namespace volley::simd {
+
+namespace detail {
+
+/// A node's list in the stream walk: rays ids[begin .. begin + count) of the arena enter
+/// subtree `ref`.
+struct StreamItem {
+  std::uint32_t ref;
+  std::uint32_t begin;
+  std::uint32_t count;
+};
+
+/// base[idx] per lane (xsimd's gather is element by element on these ISAs).
+template <class Arch>
+[[gnu::always_inline]] inline FloatB<Arch> gather(const float* base, IntB<Arch> idx) {
+  if constexpr (kLanes<Arch> == 16)
+    return _mm512_i32gather_ps(idx, base, 4);
+  else if constexpr (kLanes<Arch> == 8)
+    return _mm256_i32gather_ps(base, idx, 4);
+  else
+    return FloatB<Arch>::gather(base, idx);
+}
+
+/// Stores the ids of `bits` (lane order) at dst; returns how many.
+template <class Arch>
+[[gnu::always_inline]] inline int compress_ids(std::uint32_t* dst, const std::uint32_t* ids, IntB<Arch> v,
+                                               std::uint32_t bits) {
+  if constexpr (kLanes<Arch> == 16) {
+    (void)ids;
+    _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(static_cast<__mmask16>(bits), v));
+    return std::popcount(bits);
+  } else {
+    (void)v;
+    int n = 0;
+    for (; bits != 0; bits &= bits - 1) dst[n++] = ids[std::countr_zero(bits)];
+    return n;
+  }
+}
+
+}  // namespace detail
+
+// The walk. Every ray of a list is tested against each child of its node with its own
+// current upper end (the oracle's padded slab test, as the per-lane packet walk), so a ray
+// visits what its single walk would and its answer is the oracle's; the order of the
+// visits differs (the closest hit keeps the oracle's rule by its bound and tie rule).
+// Children's lists are walked nearest first by their rays' mean entry distance for a
+// query that asks (kNearFirst), in slot order otherwise.
+template <class Arch, TriangleTest Test, bool Robust>
+template <class Query>
+void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query) {
+  using B = detail::FloatB<Arch>;
+  using I = detail::IntB<Arch>;
+  using M = detail::MaskB<Arch>;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  if (n == 0 || bvh.root == wide_ref::kEmptyRef) return;
+  StreamScratch& scratch = stream_scratch();
+  // Per ray, eight floats in one half line (a group's gathers of them then meet the same
+  // lines): origin, tmin, reciprocal direction, and the current upper end tfar.
+  float* const data = scratch.ray_lanes(n);
+  const auto tfar = [data](std::size_t i) -> float& { return data[8 * i + 7]; };
+  PreparedRay* const prepared = scratch.prepared(n);
+
+  // The rays the oracle does not reject form the root's list.
+  std::uint32_t* lists = scratch.lists(n + L);
+  std::uint32_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    __m128 inv;
+    if (prepare_single<Query::kSureRange>(rays[i], prepared[i], inv) == detail::RayScreen::rejected) {
+      continue;
+    }
+    _mm_store_ps(data + 8 * i, _mm_loadu_ps(&rays[i].org[0]));  // org, tmin
+    _mm_store_ps(data + 8 * i + 4, inv);
+    tfar(i) = query.bound(i, rays[i]);
+    lists[count++] = static_cast<std::uint32_t>(i);
+  }
+  if (count == 0) return;
+
+  const B pad(Robust ? core::kSlabExitPad : 1.0f);
+  detail::StreamItem stack[detail::kWideStack];
+  int size = 0;
+  detail::StreamItem cur{bvh.root, 0, count};
+  std::size_t top = count;
+  for (;;) {
+    if (cur.count < kStreamSwitchRays) {
+      // Few rays: each on by itself from here.
+      for (std::uint32_t k = 0; k < cur.count; ++k) {
+        const std::uint32_t i = lists[cur.begin + k];
+        if (tfar(i) == -kInf) continue;
+        query.single(bvh, rays[i], cur.ref, i, tfar(i));
+      }
+    } else if (cur.ref & wide_ref::kLeafBit) {
+      const std::uint32_t blocks = wide_ref::leaf_count(cur.ref);
+      if (blocks != 0) {
+        const Block* first = bvh.blocks + wide_ref::leaf_first(cur.ref);
+        for (std::uint32_t k = 0; k < cur.count; ++k) {
+          const std::uint32_t i = lists[cur.begin + k];
+          if (tfar(i) == -kInf) continue;
+          query.leaf(i, prepared[i], first, blocks, tfar(i));
+        }
+      }
+    } else {
+      // Split the list by the children's boxes into `split` (child j's list at j * cap).
+      const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur.ref);
+      const std::size_t cap = cur.count + L;
+      std::uint32_t* const split = scratch.split(N * cap);
+      int used = 0;
+      while (used < N && node.child[used] != wide_ref::kEmptyRef) ++used;
+      std::uint32_t child_count[N] = {};
+      B entry_sum[N];
+      for (int j = 0; j < N; ++j) entry_sum[j] = B(0.0f);
+      const std::uint32_t* list = lists + cur.begin;
+      for (std::uint32_t g = 0; g < cur.count; g += L) {
+        const std::uint32_t m = std::min<std::uint32_t>(L, cur.count - g);
+        alignas(64) std::uint32_t ids[L];
+        for (int l = 0; l < L; ++l) ids[l] = l < static_cast<int>(m) ? list[g + l] : list[g];
+        const I idx = I::load_aligned(reinterpret_cast<const std::int32_t*>(ids));
+        const I at = idx * I(8);
+        const B gx = detail::gather<Arch>(data, at), gy = detail::gather<Arch>(data + 1, at);
+        const B gz = detail::gather<Arch>(data + 2, at), gtmin = detail::gather<Arch>(data + 3, at);
+        const B gix = detail::gather<Arch>(data + 4, at), giy = detail::gather<Arch>(data + 5, at);
+        const B giz = detail::gather<Arch>(data + 6, at), gtfar = detail::gather<Arch>(data + 7, at);
+        const M valid = detail::mask_from_bits<Arch>(m == L ? kChunkBits : (1u << m) - 1u);
+        const M negx = gix < B(0.0f), negy = giy < B(0.0f), negz = giz < B(0.0f);
+        for (int j = 0; j < used; ++j) {
+          const B lx = (B(node.bounds[0][j]) - gx) * gix, hx = (B(node.bounds[1][j]) - gx) * gix;
+          const B ly = (B(node.bounds[2][j]) - gy) * giy, hy = (B(node.bounds[3][j]) - gy) * giy;
+          const B lz = (B(node.bounds[4][j]) - gz) * giz, hz = (B(node.bounds[5][j]) - gz) * giz;
+          const B tnx = xsimd::select(negx, hx, lx), tfx = xsimd::select(negx, lx, hx);
+          const B tny = xsimd::select(negy, hy, ly), tfy = xsimd::select(negy, ly, hy);
+          const B tnz = xsimd::select(negz, hz, lz), tfz = xsimd::select(negz, lz, hz);
+          // NaN-safe order, as PacketLanes::slabs.
+          const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, gtmin)));
+          const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, gtfar))) * pad;
+          const M hit = valid & (entry <= exit);
+          const std::uint32_t bits = detail::bits_from_mask<Arch>(hit);
+          if constexpr (Query::kNearFirst) entry_sum[j] = entry_sum[j] + xsimd::select(hit, entry, B(0.0f));
+          child_count[j] += detail::compress_ids<Arch>(split + j * cap + child_count[j], ids, idx, bits);
+        }
+      }
+      // Push order: the child walked first goes last (farthest mean entry first).
+      int order[N];
+      int pushed = 0;
+      for (int j = 0; j < used; ++j)
+        if (child_count[j] != 0) order[pushed++] = j;
+      if constexpr (Query::kNearFirst) {
+        float mean[N];
+        for (int k = 0; k < pushed; ++k)
+          mean[order[k]] = xsimd::hadd(entry_sum[order[k]]) / static_cast<float>(child_count[order[k]]);
+        std::sort(order, order + pushed, [&](int a, int b) { return mean[a] > mean[b]; });
+      } else {
+        std::reverse(order, order + pushed);
+      }
+      std::size_t need = top;
+      for (int k = 0; k < pushed; ++k) need += child_count[order[k]];
+      lists = scratch.lists(need);
+      for (int k = 0; k < pushed; ++k) {
+        const int j = order[k];
+        std::memcpy(lists + top, split + j * cap, child_count[j] * sizeof(std::uint32_t));
+        stack[size++] = {node.child[j], static_cast<std::uint32_t>(top), child_count[j]};
+        top += child_count[j];
+      }
+    }
+    if (size == 0) return;
+    cur = stack[--size];
+    top = cur.begin + cur.count;
+  }
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray* rays, std::size_t count,
+                                               std::uint8_t* blocked) {
+  std::memset(blocked, 0, count);
+  detail::AnyHitStream<WideKernels> query{blocked};
+  for (std::size_t first = 0; first < count; first += kStreamBatch) {
+    query.blocked = blocked + first;
+    trace_stream(bvh, rays + first, std::min(kStreamBatch, count - first), query);
+  }
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits) {
+  detail::ClosestHitStream<WideKernels> query{hits};
+  for (std::size_t first = 0; first < count; first += kStreamBatch) {
+    query.hits = hits + first;
+    trace_stream(bvh, rays + first, std::min(kStreamBatch, count - first), query);
+  }
+}
+
+}  // namespace volley::simd
