@@ -81,18 +81,15 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
     }
     if (bits != 0) {
       if (!(cur & wide_ref::kLeafBit)) {
-        // Interior: every used child against the active lanes first, then the entered ones
-        // in slot order: the first-entered child is the next `cur`, the others pushed. The
-        // tests carry no branch on their outcome, which the predictor cannot guess.
+        // Interior: each child against the active lanes.
         const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
-        B dist[N][C];
-        std::uint32_t entered = 0;
-#pragma GCC unroll 8
-        for (int j = 0; j < N; ++j) {
+        // Child j's entry distance per lane (NaN where a lane does not enter it); whether
+        // some lane enters it.
+        const auto enter = [&](int j, B* dist) {
           bool any = false;
           for (int c = 0; c < C; ++c) {
             if (!xsimd::any(act[c])) {
-              dist[j][c] = B(kNaN);
+              dist[c] = B(kNaN);
               continue;
             }
             B entry(0.0f), exit(0.0f);  // set below
@@ -112,41 +109,70 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
               exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
             }
             const M hit = act[c] & (entry <= exit);
-            dist[j][c] = xsimd::select(hit, entry, B(kNaN));
+            dist[c] = xsimd::select(hit, entry, B(kNaN));
             any |= xsimd::any(hit);
           }
-          entered |= static_cast<std::uint32_t>(any) << j;
-        }
-        std::uint32_t next = wide_ref::kEmptyRef;
-        B next_dist[C];
-        for (; entered != 0; entered &= entered - 1) {
-          const int j = std::countr_zero(entered);
-          const std::uint32_t child = node.child[j];
-          if (next == wide_ref::kEmptyRef) {
-            next = child;
-            for (int c = 0; c < C; ++c) next_dist[c] = dist[j][c];
+          return any;
+        };
+        if constexpr (!Query::kNearFirst) {
+          // Any order: every entered child pushed with no branch on whether it is entered
+          // (a coin toss to the predictor), in reverse slot order, so that the first entered
+          // is next and the rest follow in slot order.
+          const int base = size;
+          for (int j = 0; j < N; ++j) {
+            const std::uint32_t child = node.child[j];
+            if (child == wide_ref::kEmptyRef) break;  // used children come first
+            B dist[C];
+            const bool any = enter(j, dist);
+            stack_ref[size] = child;
+            for (int c = 0; c < C; ++c) dist[c].store_aligned(stack_dist[size] + c * L);
+            size += any ? 1 : 0;
+          }
+          if (size != base) {
+            // The first entered next, the others from the last.
+            --size;
+            cur = stack_ref[base];
+            for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[base] + c * L);
+            stack_ref[base] = stack_ref[size];
+            for (int c = 0; c < C; ++c) B::load_aligned(stack_dist[size] + c * L).store_aligned(stack_dist[base] + c * L);
             continue;
           }
-          bool nearer = false;
-          if constexpr (Query::kNearFirst)
-            for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[j][c] < next_dist[c]);
-          float* slot = stack_dist[size];
-          if (nearer) {
-            stack_ref[size++] = next;
-            for (int c = 0; c < C; ++c) {
-              next_dist[c].store_aligned(slot + c * L);
-              next_dist[c] = dist[j][c];
+        } else {
+          // Nearest first: the first-entered child is the next `cur` unless a later one is
+          // entered earlier by some lane; the others pushed.
+          std::uint32_t next = wide_ref::kEmptyRef;
+          B next_dist[C];
+          for (int c = 0; c < C; ++c) next_dist[c] = B(kNaN);
+          for (int j = 0; j < N; ++j) {
+            const std::uint32_t child = node.child[j];
+            if (child == wide_ref::kEmptyRef) break;  // used children come first
+            B dist[C];
+            if (!enter(j, dist)) continue;
+            if (next == wide_ref::kEmptyRef) {
+              next = child;
+              for (int c = 0; c < C; ++c) next_dist[c] = dist[c];
+              continue;
             }
-            next = child;
-          } else {
-            stack_ref[size++] = child;
-            for (int c = 0; c < C; ++c) dist[j][c].store_aligned(slot + c * L);
+            bool nearer = false;
+            for (int c = 0; c < C; ++c) nearer = nearer || xsimd::any(dist[c] < next_dist[c]);
+            float* slot = stack_dist[size];
+            if (nearer) {
+              stack_ref[size++] = next;
+              for (int c = 0; c < C; ++c) {
+                next_dist[c].store_aligned(slot + c * L);
+                next_dist[c] = dist[c];
+              }
+              next = child;
+            } else {
+              stack_ref[size++] = child;
+              for (int c = 0; c < C; ++c) dist[c].store_aligned(slot + c * L);
+            }
           }
-        }
-        if (next != wide_ref::kEmptyRef) {
-          cur = next;
-          for (int c = 0; c < C; ++c) cur_dist[c] = next_dist[c];
-          continue;
+          if (next != wide_ref::kEmptyRef) {
+            cur = next;
+            for (int c = 0; c < C; ++c) cur_dist[c] = next_dist[c];
+            continue;
+          }
         }
       } else {
         // Leaf: its blocks to the query, for the active lanes.

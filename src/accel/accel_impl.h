@@ -233,9 +233,11 @@ struct Accel::Impl {
   /// masks: one per ray, or null.
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
-  /// Whether `rays_left` rays of a stream go to the stream walk (simd/wide/stream_walk.h):
-  /// a scene that is one wide BVH (wide_only) and at least kStreamWalkRays of them.
-  bool stream_walk_for(std::size_t rays_left) const;
+  /// Streams hand their incoherent runs to the stream walk (simd/wide/stream_walk.h, see
+  /// stream.cpp): a scene that is one wide BVH (wide_only) on AVX-512 (on AVX2 and SSE4.2
+  /// it measured slower than single rays: perf/rays.md); set with wide_only. A stream
+  /// needs at least kStreamWalkRays such rays.
+  bool stream_walk = false;
   static constexpr std::size_t kStreamWalkRays = 256;
   AccelInfo info() const;
   /// Every hit of the layers `mask` selects, instances included, appended to `out`

@@ -1,6 +1,7 @@
-// Accel's stream queries: runs of 16 rays traced as one packet where that pays (see
-// volley/accel.h), the rest one by one.
+// Accel's stream queries: runs of 16 coherent rays traced as one packet, the rest by the
+// stream walk where the scene and ISA allow it, else one by one (see volley/accel.h).
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <vector>
 
@@ -9,34 +10,36 @@
 namespace volley {
 namespace {
 
-/// True when the directions of rays[0 .. n) share one octant (sign bits; -0 negative):
-/// the stream policy's test for tracing them as one packet below AVX-512.
-bool same_octant(const Ray* rays, std::size_t n) {
-  std::uint32_t all = 7, any = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t oct = (std::signbit(rays[i].dir[0]) ? 1u : 0u) | (std::signbit(rays[i].dir[1]) ? 2u : 0u) |
-                              (std::signbit(rays[i].dir[2]) ? 4u : 0u);
-    all &= oct;
-    any |= oct;
-  }
-  return all == any;
+/// The axes across whose plane the directions of rays[0 .. n) spread (sign bits; -0
+/// negative): 0 for one octant. Shadow rays toward one light spread across one plane at
+/// most, but near an axis; bounce and ambient-occlusion rays across two or three.
+int mixed_axes(const Ray* rays, std::size_t n) {
+  std::uint32_t all[3] = {~0u, ~0u, ~0u}, any[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t bits = std::bit_cast<std::uint32_t>(rays[i].dir[a]);
+      all[a] &= bits;
+      any[a] |= bits;
+    }
+  return static_cast<int>(((all[0] ^ any[0]) >> 31) + ((all[1] ^ any[1]) >> 31) + ((all[2] ^ any[2]) >> 31));
 }
 
 /// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
 /// (Accel::Impl::stream_packets), and one octant, or on AVX-512 any octants where the walk
-/// needs no order (occlusion, every hit): closest-hit runs of mixed octants (diffuse rays)
-/// went faster ray by ray there too, occlusion runs straddling an axis plane (shadow rays)
-/// as packets (perf/rays.md). Scenes with instances: any octants, since the packet shares
-/// the top level's walk (perf/instances.md).
+/// needs no order (occlusion, every hit): closest-hit runs of mixed octants went faster ray
+/// by ray there too, occlusion runs straddling an axis plane (shadow rays) as packets
+/// (perf/rays.md). Scenes with instances: any octants, since the packet shares the top
+/// level's walk (perf/instances.md).
 template <class Impl>
 bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered) {
   return n == 16 && impl.stream_packets &&
-         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || same_octant(rays, n));
+         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || mixed_axes(rays, n) == 0);
 }
 
-/// The rays of a stream left to the stream walk, copied together (thread_local, reused).
+/// The rays of a stream left to the stream walk, copied together (per thread, reused).
 struct Leftover {
-  std::vector<std::uint32_t> index;  ///< their places in the caller's stream
+  std::vector<std::size_t> runs;     ///< the first ray of each run left
+  std::vector<std::uint32_t> index;  ///< the rays' places in the caller's stream
   std::vector<Ray> rays;
   std::vector<Hit> hits;
   std::vector<std::uint8_t> blocked;
@@ -47,45 +50,67 @@ Leftover& leftover() {
   return left;
 }
 
-}  // namespace
-
-bool Accel::Impl::stream_walk_for(std::size_t rays_left) const {
-  return wide_only != nullptr && rays_left >= kStreamWalkRays;
+/// The stream policy for one query. Runs of 16 (the last may be shorter) whose directions
+/// spread across two or more axis planes go to the stream walk where the scene allows it
+/// (Accel::Impl::stream_walk) and at least kStreamWalkRays such rays are in the stream:
+/// their indices end in left.index, the rays whose mask meets the scene's (`scene_mask`)
+/// copied to left.rays, the others answered as misses by skip(i). Every other run as
+/// as_packet says: packet(first) traces the run from `first` as a packet, single(i) ray i.
+template <class Impl, class Packet, class Single, class Skip>
+void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered,
+          Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
+  const auto by_rule = [&](std::size_t first) {
+    const std::size_t n = std::min<std::size_t>(16, count - first);
+    if (as_packet(impl, rays + first, n, ordered))
+      packet(first);
+    else
+      for (std::size_t i = first; i < first + n; ++i) single(i);
+  };
+  left.runs.clear();
+  left.index.clear();
+  left.rays.clear();
+  for (std::size_t first = 0; first < count; first += 16) {
+    const std::size_t n = std::min<std::size_t>(16, count - first);
+    if (impl.stream_walk && mixed_axes(rays + first, n) >= 2)
+      left.runs.push_back(first);
+    else
+      by_rule(first);
+  }
+  if (left.runs.size() * 16 < Impl::kStreamWalkRays) {
+    for (std::size_t first : left.runs) by_rule(first);
+    return;
+  }
+  for (std::size_t first : left.runs)
+    for (std::size_t i = first; i < std::min(count, first + 16); ++i) {
+      if (masks && !(masks[i] & impl.simple_mask)) {
+        skip(i);
+        continue;
+      }
+      left.index.push_back(static_cast<std::uint32_t>(i));
+      left.rays.push_back(rays[i]);
+    }
 }
+
+}  // namespace
 
 void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
   Leftover& left = leftover();
-  left.index.clear();
-  for (std::size_t first = 0; first < count; first += 16) {
-    const std::size_t n = std::min<std::size_t>(16, count - first);
-    const std::uint32_t* m = masks ? masks + first : nullptr;
-    if (as_packet(*this, rays + first, n, true)) {
-      RayPacket<16> p;
-      volley::load(p, rays + first, 16);
-      HitPacket<16> h;
-      reset(h);
-      intersect(p, h, m);
-      store(h, hits + first, 16);
-    } else {
-      for (std::size_t i = 0; i < n; ++i) left.index.push_back(static_cast<std::uint32_t>(first + i));
-    }
-  }
-  if (!stream_walk_for(left.index.size())) {
-    for (std::uint32_t i : left.index) hits[i] = intersect(rays[i], masks ? masks[i] : kMaskAll);
-    return;
-  }
-  // The stream walk, for the rays whose mask meets the scene's (the others miss).
-  left.rays.clear();
-  std::size_t kept = 0;
-  for (std::uint32_t i : left.index) {
-    hits[i] = Hit{};
-    if (masks && !(masks[i] & simple_mask)) continue;
-    left.index[kept++] = i;
-    left.rays.push_back(rays[i]);
-  }
-  left.hits.assign(kept, Hit{});
-  wide_only->intersect(left.rays.data(), kept, left.hits.data());
-  for (std::size_t k = 0; k < kept; ++k) {
+  runs(
+      *this, rays, masks, count, true, left,
+      [&](std::size_t first) {
+        RayPacket<16> p;
+        volley::load(p, rays + first, 16);
+        HitPacket<16> h;
+        reset(h);
+        intersect(p, h, masks ? masks + first : nullptr);
+        store(h, hits + first, 16);
+      },
+      [&](std::size_t i) { hits[i] = intersect(rays[i], masks ? masks[i] : kMaskAll); },
+      [&](std::size_t i) { hits[i] = Hit{}; });
+  if (left.rays.empty()) return;
+  left.hits.assign(left.rays.size(), Hit{});
+  wide_only->intersect(left.rays.data(), left.rays.size(), left.hits.data());
+  for (std::size_t k = 0; k < left.index.size(); ++k) {
     Hit& h = hits[left.index[k]];
     h = left.hits[k];
     attribute(h.prim, h.geom);
@@ -94,34 +119,20 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
 
 void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
   Leftover& left = leftover();
-  left.index.clear();
-  for (std::size_t first = 0; first < count; first += 16) {
-    const std::size_t n = std::min<std::size_t>(16, count - first);
-    const std::uint32_t* m = masks ? masks + first : nullptr;
-    if (as_packet(*this, rays + first, n, false)) {
-      RayPacket<16> p;
-      volley::load(p, rays + first, 16);
-      const std::uint32_t mask = occluded(p, m);
-      for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
-    } else {
-      for (std::size_t i = 0; i < n; ++i) left.index.push_back(static_cast<std::uint32_t>(first + i));
-    }
-  }
-  if (!stream_walk_for(left.index.size())) {
-    for (std::uint32_t i : left.index) blocked[i] = occluded(rays[i], masks ? masks[i] : kMaskAll) ? 1 : 0;
-    return;
-  }
-  left.rays.clear();
-  std::size_t kept = 0;
-  for (std::uint32_t i : left.index) {
-    blocked[i] = 0;
-    if (masks && !(masks[i] & simple_mask)) continue;
-    left.index[kept++] = i;
-    left.rays.push_back(rays[i]);
-  }
-  left.blocked.resize(kept);
-  wide_only->occluded(left.rays.data(), kept, left.blocked.data());
-  for (std::size_t k = 0; k < kept; ++k) blocked[left.index[k]] = left.blocked[k];
+  runs(
+      *this, rays, masks, count, false, left,
+      [&](std::size_t first) {
+        RayPacket<16> p;
+        volley::load(p, rays + first, 16);
+        const std::uint32_t mask = occluded(p, masks ? masks + first : nullptr);
+        for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
+      },
+      [&](std::size_t i) { blocked[i] = occluded(rays[i], masks ? masks[i] : kMaskAll) ? 1 : 0; },
+      [&](std::size_t i) { blocked[i] = 0; });
+  if (left.rays.empty()) return;
+  left.blocked.resize(left.rays.size());
+  wide_only->occluded(left.rays.data(), left.rays.size(), left.blocked.data());
+  for (std::size_t k = 0; k < left.index.size(); ++k) blocked[left.index[k]] = left.blocked[k];
 }
 
 void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>* out) const {
