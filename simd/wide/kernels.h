@@ -66,16 +66,6 @@ inline constexpr int kWidePacket = 16;
 /// perf/traversal.md).
 inline constexpr int kPacketSwitchLanes = 3;
 
-/// The stream walk (stream_walk.h) takes a stream this many rays at a time, and hands a
-/// subtree whose list has fewer than kStreamSwitchRays rays to the single-ray walk.
-#ifndef EXP_STREAM_BATCH
-#define EXP_STREAM_BATCH 4096
-#endif
-#ifndef EXP_STREAM_SWITCH
-#define EXP_STREAM_SWITCH 16
-#endif
-inline constexpr std::size_t kStreamBatch = EXP_STREAM_BATCH;
-inline constexpr std::uint32_t kStreamSwitchRays = EXP_STREAM_SWITCH;
 
 namespace detail {
 /// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
