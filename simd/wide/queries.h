@@ -376,48 +376,36 @@ struct AnyHitPacket {
 };
 
 /// Any hit of each ray of a stream (stream_walk.h): blocked[i] = 1 at ray i's first hit,
-/// its upper end then -inf (finished).
+/// its upper end then -inf (finished). A stream query names the single-ray query that
+/// answers one ray (`Single`, at leaves and in subtrees left to the single walk), makes one
+/// for ray i, and takes its answer back (`done`), lowering the ray's upper end `far`.
 template <class Kernels>
 struct AnyHitStream {
+  using Single = AnyHitRay<Kernels>;
   static constexpr bool kNearFirst = false;
-  static constexpr bool kSureRange = true;
   std::uint8_t* blocked;
 
   float bound(std::size_t, const Ray& ray) const { return ray.tmax; }
-  [[gnu::always_inline]] void leaf(std::uint32_t i, const PreparedRay& pr, const typename Kernels::Block* blocks,
-                                   std::uint32_t count, float& far) {
-    AnyHitRay<Kernels> q;
-    if (q.leaf(pr, blocks, count, far) == LeafStep::done) finish(i, far);
-  }
-  void single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, std::uint32_t i, float& far) {
-    AnyHitRay<Kernels> q;
-    if (Kernels::trace_single(bvh, ray, start, q)) finish(i, far);
-  }
-
- private:
-  void finish(std::uint32_t i, float& far) {
+  Single single(std::uint32_t) const { return Single{}; }
+  void done(std::uint32_t i, const Single& q, float& far) {
+    if (!q.answer()) return;
     blocked[i] = 1;
     far = -std::numeric_limits<float>::infinity();
   }
 };
 
-/// Closest hit of each ray of a stream (stream_walk.h): hits[i] as ClosestHitRay's, the
-/// ray's upper end lowered to it.
+/// Closest hit of each ray of a stream (stream_walk.h): hits[i] as ClosestHitRay's (its t
+/// on entry bounds the search), the ray's upper end lowered to it.
 template <class Kernels>
 struct ClosestHitStream {
+  using Single = ClosestHitRay<Kernels>;
   static constexpr bool kNearFirst = true;
-  static constexpr bool kSureRange = false;
   Hit* hits;
 
   float bound(std::size_t i, const Ray& ray) const { return hits[i].t < ray.tmax ? hits[i].t : ray.tmax; }
-  [[gnu::always_inline]] void leaf(std::uint32_t i, const PreparedRay& pr, const typename Kernels::Block* blocks,
-                                   std::uint32_t count, float& far) {
-    ClosestHitRay<Kernels> q{hits[i]};
-    q.leaf(pr, blocks, count, far);
-  }
-  void single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, std::uint32_t i, float& far) {
-    ClosestHitRay<Kernels> q{hits[i]};
-    if (Kernels::trace_single(bvh, ray, start, q)) far = hits[i].t;
+  Single single(std::uint32_t i) const { return Single{hits[i]}; }
+  void done(std::uint32_t i, const Single& q, float& far) {
+    if (q.answer()) far = hits[i].t;
   }
 };
 

@@ -85,7 +85,7 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
   std::uint32_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     __m128 inv;
-    if (prepare_single<Query::kSureRange>(rays[i], prepared[i], inv) == detail::RayScreen::rejected) {
+    if (prepare_single<Query::Single::kSureRange>(rays[i], prepared[i], inv) == detail::RayScreen::rejected) {
       continue;
     }
     _mm_store_ps(data + 8 * i, _mm_loadu_ps(&rays[i].org[0]));  // org, tmin
@@ -102,11 +102,17 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
   std::size_t top = count;
   for (;;) {
     if (cur.count < kStreamSwitchRays) {
-      // Few rays: each on by itself from here.
+      // Few rays: each on by itself from here, by the single-ray walk of its prepared ray.
       for (std::uint32_t k = 0; k < cur.count; ++k) {
         const std::uint32_t i = lists[cur.begin + k];
         if (tfar(i) == -kInf) continue;
-        query.single(bvh, rays[i], cur.ref, i, tfar(i));
+        const __m128 inv = _mm_load_ps(data + 8 * i + 4);
+        typename Query::Single q = query.single(i);
+        if (_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(rays[i].dir), _mm_setzero_ps())) & 7)
+          walk<typename Query::Single, false>(bvh, prepared[i], inv, cur.ref, q);
+        else
+          walk<typename Query::Single, true>(bvh, prepared[i], inv, cur.ref, q);
+        query.done(i, q, tfar(i));
       }
     } else if (cur.ref & wide_ref::kLeafBit) {
       const std::uint32_t blocks = wide_ref::leaf_count(cur.ref);
@@ -115,7 +121,9 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
         for (std::uint32_t k = 0; k < cur.count; ++k) {
           const std::uint32_t i = lists[cur.begin + k];
           if (tfar(i) == -kInf) continue;
-          query.leaf(i, prepared[i], first, blocks, tfar(i));
+          typename Query::Single q = query.single(i);
+          q.leaf(prepared[i], first, blocks, tfar(i));
+          query.done(i, q, tfar(i));
         }
       }
     } else {
