@@ -184,12 +184,16 @@ class VOLLEY_API Accel {
   /// Closest hits of a stream of `count` rays: hits[i] answers rays[i] (a miss where
   /// nothing is hit; every entry written). Policy: the stream is cut into runs of 16
   /// consecutive rays (the rest ray by ray). A run whose directions share one octant is
-  /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light), others
-  /// ray by ray, which was faster for diffuse rays on every ISA (perf/traversal.md,
-  /// perf/rays.md); occlusion streams on AVX-512, and every stream of a scene with
-  /// instances, trace every run as a packet (shadow rays straddling an axis plane gained on
-  /// AVX-512; with instances a packet shares the top level's walk: perf/instances.md).
-  /// Same answers as intersect(ray) per ray.
+  /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light). On
+  /// AVX-512, in a scene of one BVH (no instances, polygons or geometry masks of several
+  /// values), the runs whose directions spread across two or more axis planes (bounce and
+  /// ambient-occlusion rays), when they hold 256 rays or more, walk the tree together by
+  /// the stream walk (docs/kernels.md; +20-44% on diffuse rays, perf/rays.md). Other runs:
+  /// closest hits ray by ray, which was faster for diffuse rays (perf/traversal.md);
+  /// occlusion on AVX-512, and every run of a scene with instances, as a packet (shadow
+  /// rays straddling one axis plane gained on AVX-512; with instances a packet shares the
+  /// top level's walk: perf/instances.md). The stream walk reorders nothing the caller
+  /// sees. Same answers as intersect(ray) per ray.
   /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
   /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in
   /// pieces of whole runs (at least 1024 rays each), with the same answers. Error for
