@@ -101,8 +101,9 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
   detail::StreamItem cur{bvh.root, 0, count};
   std::size_t top = count;
   for (;;) {
-    if (cur.count < kStreamSwitchRays) {
-      // Few rays: each on by itself from here, by the single-ray walk of its prepared ray.
+    if (cur.count < kStreamSwitchRays && !(cur.ref & wide_ref::kLeafBit)) {
+      // Few rays: each on by itself from here, by the single-ray walk of its prepared ray
+      // (a leaf's list, however short, is tested at once: the walk would only add its entry).
       for (std::uint32_t k = 0; k < cur.count; ++k) {
         const std::uint32_t i = lists[cur.begin + k];
         if (tfar(i) == -kInf) continue;
