@@ -2,8 +2,8 @@
 // Barringer and Akenine-Möller, "Dynamic ray stream traversal", SIGGRAPH 2014). A node
 // takes the list of rays that entered it and splits it by its children's boxes, L rays
 // at a time with the oracle's per-lane test; each child's list is walked in turn, a short
-// one ray by ray by the single-ray walk. For large incoherent batches (bounce and shadow
-// rays handed to the stream API), where packets of neighbours share little.
+// one ray by ray by the single-ray walk. For incoherent rays handed to the stream API
+// (bounce and ambient-occlusion rays), where packets of neighbours share little.
 #pragma once
 #include <immintrin.h>
 
@@ -12,7 +12,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <vector>
 
 #include "simd/stream_scratch.h"
 #include "simd/wide/queries.h"
@@ -22,8 +21,8 @@ namespace volley::simd {
 
 namespace detail {
 
-/// A node's list in the stream walk: rays ids[begin .. begin + count) of the arena enter
-/// subtree `ref`.
+/// A subtree and its list in the stream walk: the rays whose ids are entries
+/// [begin, begin + count) of the lists (StreamScratch::lists) enter subtree `ref`.
 struct StreamItem {
   std::uint32_t ref;
   std::uint32_t begin;
@@ -172,10 +171,17 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
       for (int j = 0; j < used; ++j)
         if (child_count[j] != 0) order[pushed++] = j;
       if constexpr (Query::kNearFirst) {
+        // Insertion sort of at most N, farthest first (entries of entered lanes are finite;
+        // a NaN mean, were one possible, would only stay in place).
         float mean[N];
         for (int k = 0; k < pushed; ++k)
           mean[order[k]] = xsimd::hadd(entry_sum[order[k]]) / static_cast<float>(child_count[order[k]]);
-        std::sort(order, order + pushed, [&](int a, int b) { return mean[a] > mean[b]; });
+        for (int k = 1; k < pushed; ++k) {
+          const int j = order[k];
+          int at = k;
+          for (; at > 0 && mean[order[at - 1]] < mean[j]; --at) order[at] = order[at - 1];
+          order[at] = j;
+        }
       } else {
         std::reverse(order, order + pushed);
       }

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include <immintrin.h>
+
 #include "accel/accel_impl.h"
 
 namespace volley {
@@ -14,14 +16,14 @@ namespace {
 /// negative): 0 for one octant. Shadow rays toward one light spread across one plane at
 /// most, but near an axis; bounce and ambient-occlusion rays across two or three.
 int mixed_axes(const Ray* rays, std::size_t n) {
-  std::uint32_t all[3] = {~0u, ~0u, ~0u}, any[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < 3; ++a) {
-      const std::uint32_t bits = std::bit_cast<std::uint32_t>(rays[i].dir[a]);
-      all[a] &= bits;
-      any[a] |= bits;
-    }
-  return static_cast<int>(((all[0] ^ any[0]) >> 31) + ((all[1] ^ any[1]) >> 31) + ((all[2] ^ any[2]) >> 31));
+  // The sign bits of every direction ANDed and ORed, three lanes at once (the fourth, tmax, ignored).
+  __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1)), any = _mm_setzero_ps();
+  for (std::size_t i = 0; i < n; ++i) {
+    const __m128 d = _mm_loadu_ps(rays[i].dir);
+    all = _mm_and_ps(all, d);
+    any = _mm_or_ps(any, d);
+  }
+  return std::popcount(static_cast<unsigned>(_mm_movemask_ps(_mm_xor_ps(all, any)) & 7));
 }
 
 /// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
@@ -30,10 +32,11 @@ int mixed_axes(const Ray* rays, std::size_t n) {
 /// by ray there too, occlusion runs straddling an axis plane (shadow rays) as packets
 /// (perf/rays.md). Scenes with instances: any octants, since the packet shares the top
 /// level's walk (perf/instances.md).
+/// `axes`: mixed_axes of the run, when known (-1: not yet).
 template <class Impl>
-bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered) {
+bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {
   return n == 16 && impl.stream_packets &&
-         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || mixed_axes(rays, n) == 0);
+         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
 }
 
 /// The rays of a stream left to the stream walk, copied together (per thread, reused).
@@ -59,9 +62,9 @@ Leftover& leftover() {
 template <class Impl, class Packet, class Single, class Skip>
 void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered,
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
-  const auto by_rule = [&](std::size_t first) {
+  const auto by_rule = [&](std::size_t first, int axes) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(impl, rays + first, n, ordered))
+    if (as_packet(impl, rays + first, n, ordered, axes))
       packet(first);
     else
       for (std::size_t i = first; i < first + n; ++i) single(i);
@@ -71,13 +74,14 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   left.rays.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (impl.stream_walk && mixed_axes(rays + first, n) >= 2)
+    const int axes = impl.stream_walk ? mixed_axes(rays + first, n) : -1;
+    if (axes >= 2)
       left.runs.push_back(first);
     else
-      by_rule(first);
+      by_rule(first, axes);
   }
   if (left.runs.size() * 16 < Impl::kStreamWalkRays) {
-    for (std::size_t first : left.runs) by_rule(first);
+    for (std::size_t first : left.runs) by_rule(first, 2);
     return;
   }
   for (std::size_t first : left.runs)
