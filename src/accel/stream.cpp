@@ -2,7 +2,6 @@
 // stream walk where the scene and ISA allow it, else one by one (see volley/accel.h).
 #include <algorithm>
 #include <bit>
-#include <cmath>
 #include <vector>
 
 #include <immintrin.h>
@@ -42,7 +41,7 @@ bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered, i
 /// The rays of a stream left to the stream walk, copied together (per thread, reused).
 struct Leftover {
   std::vector<std::size_t> runs;     ///< the first ray of each run left
-  std::vector<std::uint32_t> index;  ///< the rays' places in the caller's stream
+  std::vector<std::size_t> index;    ///< the rays' places in the caller's stream
   std::vector<Ray> rays;
   std::vector<Hit> hits;
   std::vector<std::uint8_t> blocked;
@@ -56,9 +55,9 @@ Leftover& leftover() {
 /// The stream policy for one query. Runs of 16 (the last may be shorter) whose directions
 /// spread across two or more axis planes go to the stream walk where the scene allows it
 /// (Accel::Impl::stream_walk) and at least kStreamWalkRays such rays are in the stream:
-/// their indices end in left.index, the rays whose mask meets the scene's (`scene_mask`)
-/// copied to left.rays, the others answered as misses by skip(i). Every other run as
-/// as_packet says: packet(first) traces the run from `first` as a packet, single(i) ray i.
+/// those whose mask meets the scene's (simple_mask) copied to left.rays, their places to
+/// left.index, the others answered as misses by skip(i). Every other run as as_packet
+/// says: packet(first) traces the run from `first` as a packet, single(i) ray i.
 template <class Impl, class Packet, class Single, class Skip>
 void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered,
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
@@ -90,7 +89,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
         skip(i);
         continue;
       }
-      left.index.push_back(static_cast<std::uint32_t>(i));
+      left.index.push_back(i);
       left.rays.push_back(rays[i]);
     }
 }
