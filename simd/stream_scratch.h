@@ -2,6 +2,7 @@
 // kept between calls. Baseline code with out-of-line members: a per-ISA object must not
 // define the containers' functions (docs/style.md rule 2).
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -37,6 +38,19 @@ class StreamScratch {
   struct Buffers;
   std::unique_ptr<Buffers> buffers_;
 };
+
+/// For compressing the set lanes of an 8-bit mask to the front with one permute (AVX2 has
+/// no compress instruction): entry m packs, 3 bits each from the lowest, the lanes of m's
+/// set bits in order.
+inline constexpr std::array<std::uint32_t, 256> kCompressLanes8 = [] {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t m = 0; m < 256; ++m) {
+    int n = 0;
+    for (std::uint32_t lane = 0; lane < 8; ++lane)
+      if ((m >> lane) & 1u) table[m] |= lane << (3 * n++);
+  }
+  return table;
+}();
 
 /// The calling thread's scratch.
 StreamScratch& stream_scratch();

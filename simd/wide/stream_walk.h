@@ -7,7 +7,6 @@
 #pragma once
 #include <immintrin.h>
 
-#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -47,6 +46,13 @@ template <class Arch>
   if constexpr (kLanes<Arch> == 16) {
     (void)ids;
     _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(static_cast<__mmask16>(bits), v));
+    return std::popcount(bits);
+  } else if constexpr (kLanes<Arch> == 8) {
+    (void)ids;
+    // vpermd reads the low 3 bits of each index.
+    const __m256i lanes = _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressLanes8[bits])),
+                                            _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, lanes));
     return std::popcount(bits);
   } else {
     (void)v;
@@ -138,7 +144,7 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
       for (int j = 0; j < N; ++j) entry_sum[j] = B(0.0f);
       const std::uint32_t* list = lists + cur.begin;
       for (std::uint32_t g = 0; g < cur.count; g += L) {
-        const std::uint32_t m = std::min<std::uint32_t>(L, cur.count - g);
+        const std::uint32_t m = cur.count - g < L ? cur.count - g : static_cast<std::uint32_t>(L);
         alignas(64) std::uint32_t ids[L];
         for (int l = 0; l < L; ++l) ids[l] = l < static_cast<int>(m) ? list[g + l] : list[g];
         const I idx = I::load_aligned(reinterpret_cast<const std::int32_t*>(ids));
@@ -183,7 +189,13 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
           order[at] = j;
         }
       } else {
-        std::reverse(order, order + pushed);
+        // (Reversed by hand: a per-ISA object must not emit a standard function, which a
+        // sanitizer build leaves out of line; docs/style.md rule 2.)
+        for (int k = 0; k < pushed / 2; ++k) {
+          const int j = order[k];
+          order[k] = order[pushed - 1 - k];
+          order[pushed - 1 - k] = j;
+        }
       }
       std::size_t need = top;
       for (int k = 0; k < pushed; ++k) need += child_count[order[k]];
@@ -208,7 +220,7 @@ void WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray* rays,
   detail::AnyHitStream<WideKernels> query{blocked};
   for (std::size_t first = 0; first < count; first += kStreamBatch) {
     query.blocked = blocked + first;
-    trace_stream(bvh, rays + first, std::min(kStreamBatch, count - first), query);
+    trace_stream(bvh, rays + first, count - first < kStreamBatch ? count - first : kStreamBatch, query);
   }
 }
 
@@ -217,7 +229,7 @@ void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray* rays
   detail::ClosestHitStream<WideKernels> query{hits};
   for (std::size_t first = 0; first < count; first += kStreamBatch) {
     query.hits = hits + first;
-    trace_stream(bvh, rays + first, std::min(kStreamBatch, count - first), query);
+    trace_stream(bvh, rays + first, count - first < kStreamBatch ? count - first : kStreamBatch, query);
   }
 }
 

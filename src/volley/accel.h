@@ -185,7 +185,7 @@ class VOLLEY_API Accel {
   /// nothing is hit; every entry written). Policy: the stream is cut into runs of 16
   /// consecutive rays (the rest ray by ray). A run whose directions share one octant is
   /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light). On
-  /// AVX-512, in a scene of one BVH (no instances, polygons or geometry masks of several
+  /// AVX-512 and AVX2, in a scene of one BVH (no instances, polygons or geometry masks of several
   /// values), the runs whose directions spread across two or more axis planes (bounce and
   /// ambient-occlusion rays), when they hold 256 rays or more, walk the tree together by
   /// the stream walk (docs/kernels.md; +20-44% on diffuse rays, perf/rays.md). Other runs:

@@ -1,6 +1,6 @@
 // The stream walk (simd/wide/stream_walk.h): a batch of rays walking the tree together,
 // each node's list split by its children's boxes. Its kernel forms against brute force over
-// the scalar oracle on every ISA this CPU has (Accel takes it on AVX-512 only), across
+// the scalar oracle on every ISA this CPU has (Accel takes it on AVX-512 and AVX2), across
 // batch boundaries, with bad rays and entry bounds; the padding of its box test (mutation
 // check); and Accel's stream policy, which hands it runs of incoherent rays.
 #include <doctest/doctest.h>
@@ -139,7 +139,7 @@ TEST_CASE("stream walk: rays touching leaf boxes at vertices need its slab paddi
 }
 
 TEST_CASE("stream walk: Accel's streams of bounce rays answer as single rays, masks and a short tail included") {
-  // On AVX-512 Accel hands these runs (directions across two or more axis planes) to the
+  // On AVX-512 and AVX2 Accel hands these runs (directions across two or more axis planes) to the
   // stream walk; elsewhere they go ray by ray. Either way every answer is the single ray's.
   const Soup soup = random_soup(2000, 41);
   const std::vector<Ray> rays = bounce_rays(3000 + 7, 11.0f, 13);
