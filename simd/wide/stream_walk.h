@@ -49,8 +49,10 @@ template <class Arch>
     return std::popcount(bits);
   } else if constexpr (kLanes<Arch> == 8) {
     (void)ids;
-    // vpermd reads the low 3 bits of each index.
-    const __m256i lanes = _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressLanes8[bits])),
+    // vpermd reads the low 3 bits of each index. (data()[]: with _GLIBCXX_ASSERTIONS
+    // std::array's operator[] is an out-of-line weak function, which a per-ISA object must
+    // not define.)
+    const __m256i lanes = _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressLanes8.data()[bits])),
                                             _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, lanes));
     return std::popcount(bits);
