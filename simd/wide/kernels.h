@@ -66,7 +66,6 @@ inline constexpr int kWidePacket = 16;
 /// perf/traversal.md).
 inline constexpr int kPacketSwitchLanes = 3;
 
-
 namespace detail {
 /// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
 enum class PacketWalk : std::uint32_t {
