@@ -38,8 +38,10 @@ bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered, i
          (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
 }
 
-/// The rays of a stream left to the stream walk, copied together (per thread, reused).
+/// The rays of a stream left to the stream walk, copied together (per thread, reused), or
+/// the whole stream in its place when every run is left to it and no mask sets one aside.
 struct Leftover {
+  bool whole = false;                ///< the caller's stream as it is, nothing copied
   std::vector<std::size_t> runs;     ///< the first ray of each run left
   std::vector<std::size_t> index;    ///< the rays' places in the caller's stream
   std::vector<Ray> rays;
@@ -56,8 +58,10 @@ Leftover& leftover() {
 /// spread across two or more axis planes go to the stream walk where the scene allows it
 /// (Accel::Impl::stream_walk) and at least kStreamWalkRays such rays are in the stream:
 /// those whose mask meets the scene's (simple_mask) copied to left.rays, their places to
-/// left.index, the others answered as misses by skip(i). Every other run as as_packet
-/// says: packet(first) traces the run from `first` as a packet, single(i) ray i.
+/// left.index, the others answered as misses by skip(i); or, when that is every run and no
+/// masks are given, none copied and left.whole set (bounce rays: the copy was 3-5% of
+/// their time). Every other run as as_packet says: packet(first) traces the run from
+/// `first` as a packet, single(i) ray i.
 template <class Impl, class Packet, class Single, class Skip>
 void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered,
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
@@ -68,6 +72,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
     else
       for (std::size_t i = first; i < first + n; ++i) single(i);
   };
+  left.whole = false;
   left.runs.clear();
   left.index.clear();
   left.rays.clear();
@@ -81,6 +86,10 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   }
   if (left.runs.size() * 16 < Impl::kStreamWalkRays) {
     for (std::size_t first : left.runs) by_rule(first, 2);
+    return;
+  }
+  if (!masks && left.runs.size() == (count + 15) / 16) {
+    left.whole = true;
     return;
   }
   for (std::size_t first : left.runs)
@@ -110,6 +119,12 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
       },
       [&](std::size_t i) { hits[i] = intersect(rays[i], masks ? masks[i] : kMaskAll); },
       [&](std::size_t i) { hits[i] = Hit{}; });
+  if (left.whole) {
+    std::fill(hits, hits + count, Hit{});
+    wide_only->intersect(rays, count, hits);
+    for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
+    return;
+  }
   if (left.rays.empty()) return;
   left.hits.assign(left.rays.size(), Hit{});
   wide_only->intersect(left.rays.data(), left.rays.size(), left.hits.data());
@@ -132,6 +147,10 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
       },
       [&](std::size_t i) { blocked[i] = occluded(rays[i], masks ? masks[i] : kMaskAll) ? 1 : 0; },
       [&](std::size_t i) { blocked[i] = 0; });
+  if (left.whole) {
+    wide_only->occluded(rays, count, blocked);
+    return;
+  }
   if (left.rays.empty()) return;
   left.blocked.resize(left.rays.size());
   wide_only->occluded(left.rays.data(), left.rays.size(), left.blocked.data());

@@ -153,7 +153,9 @@ TEST_CASE("stream walk: Accel's streams of bounce rays answer as single rays, ma
     accel.commit(volley::Options{TriangleTest::watertight, isa});
     std::vector<std::uint32_t> masks(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) masks[i] = i % 5 == 0 ? 0x1u : volley::kMaskAll;
-    std::vector<Hit> hits(rays.size()), masked(rays.size());
+    // Without masks every run (bounce rays) goes to the stream walk, which then traces the
+    // caller's arrays in place: answers stale on entry must not survive.
+    std::vector<Hit> hits(rays.size(), Hit{1e-3f, 0.5f, 0.5f, 3, 0, 0}), masked(rays.size());
     std::vector<std::uint8_t> blocked(rays.size(), 7), blocked_masked(rays.size(), 7);
     accel.intersect(rays.data(), rays.size(), hits.data());
     accel.occluded(rays.data(), rays.size(), blocked.data());
