@@ -51,8 +51,17 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
   const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
   const B pinf(kInf), ninf(-kInf);
 
-  // Per-lane rays (for the leaf box tests) and the packet's intervals.
+  // Per-lane rays (for the leaf box tests) and the packet's intervals. No lane has a zero
+  // direction component here, so the lanes' tests take the fused form (kFusedLanes).
   detail::PacketLanes<Arch, K> lanes(rays, setup, query);
+  constexpr bool kFused = detail::kFusedLanes<Arch>;
+  using FusedLanes = typename detail::PacketLanes<Arch, K>::Fused;
+  [[maybe_unused]] const FusedLanes fused = [&] {
+    if constexpr (kFused)
+      return lanes.fuse(pad1, Robust);
+    else
+      return FusedLanes{};
+  }();
   B olo[3] = {pinf, pinf, pinf}, ohi[3] = {ninf, ninf, ninf}, ilo[3] = {pinf, pinf, pinf}, ihi[3] = {ninf, ninf, ninf};
   B tmin_lo = pinf;
   for (int c = 0; c < C; ++c) {
@@ -88,6 +97,13 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
   const auto pad8 = V8::set1(pad1);
   float far_hi = lanes.far_max();
   const B padb(pad1);
+  // A lane's own test of child j of `node` (leaves, popped subtrees).
+  const auto lane_slabs = [&](const WideNode<N>& node, int j, int c, B& e, B& x) {
+    if constexpr (kFused)
+      lanes.fused_slabs(fused, node, j, np, c, lanes.tfar[c] * padb, e, x);
+    else
+      lanes.slabs(node, j, np, c, padb, e, x);
+  };
 
   detail::FrustumItem<Arch> stack[detail::kWideStack];
   int size = 0;
@@ -104,7 +120,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
       std::uint32_t now = 0;
       for (int c = 0; c < C; ++c) {
         B e, x;
-        lanes.slabs(parent, static_cast<int>(cur_slot), np, c, padb, e, x);
+        lane_slabs(parent, static_cast<int>(cur_slot), c, e, x);
         now |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
       }
       live &= now;
@@ -155,7 +171,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
             child_lanes = 0;
             for (int c = 0; c < C; ++c) {
               B e, x;
-              lanes.slabs(node, j, np, c, padb, e, x);
+              lane_slabs(node, j, c, e, x);
               child_lanes |= detail::bits_from_mask<Arch>(e <= x) << (c * L);
             }
             child_lanes &= valid & ~finished;

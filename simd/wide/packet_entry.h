@@ -24,8 +24,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
   const bool frustum = setup.walk == detail::PacketWalk::frustum ||
                        (setup.walk == detail::PacketWalk::spread_frustum && detail::spread_frustum<Query>());
   if (frustum && !(bvh.root & wide_ref::kLeafBit)) return trace_frustum(bvh, prep, setup, query);
-  return setup.walk == detail::PacketWalk::mixed_octants ? trace_packet<Query, false>(bvh, prep, setup, query)
-                                                         : trace_packet<Query, true>(bvh, prep, setup, query);
+  if (setup.walk == detail::PacketWalk::mixed_octants) return trace_packet<Query, false, false>(bvh, prep, setup, query);
+  if constexpr (detail::kFusedLanes<Arch>)
+    if (setup.walk != detail::PacketWalk::one_octant) return trace_packet<Query, true, true>(bvh, prep, setup, query);
+  return trace_packet<Query, true, false>(bvh, prep, setup, query);
 }
 
 template <class Arch, TriangleTest Test, bool Robust>

@@ -12,6 +12,12 @@ namespace volley::simd {
 
 namespace detail {
 
+/// Whether the packet walks test lanes in the fused form (PacketLanes::fused_slabs): on
+/// AVX-512. AVX2 has FMA too, but its 16 registers do not hold the form's nine constants
+/// per chunk beside the rest: kitchen shadow packets lost 6% there (perf/rays.md).
+template <class Arch>
+inline constexpr bool kFusedLanes = kHasFma<Arch> && kLanes<Arch> == 16;
+
 template <class Arch, int K>
 struct PacketLanes {
   using B = FloatB<Arch>;
@@ -55,6 +61,45 @@ struct PacketLanes {
     const B tfz = (B(node.bounds[np[2] ^ 1][j]) - oz[c]) * iz[c];
     entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
     exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
+  }
+
+  /// The fused form of slabs() (PacketLanes::fuse first): each slab distance is one fused
+  /// b inv - c with c = org inv rounded outwards once per packet, the single-ray walk's
+  /// form (single_walk.h, where the margin is argued), and the exit padding folded into the
+  /// far planes' reciprocals. For lanes with no zero direction component (kFusedLanes).
+  struct Fused {
+    B cn[3][C], cf[3][C], fi[3][C];  // near and far c, reciprocal times the exit padding
+  };
+
+  /// The fused form's per-lane constants; `pad` is the exit padding (1 without Robust).
+  Fused fuse(float pad, bool robust) const {
+    static_assert(kFusedLanes<Arch>, "the fused slab test is for AVX-512");
+    Fused f;
+    const B rel(robust ? 0x1p-22f : 0.0f), tiny(robust ? 0x1p-149f : 0.0f);
+    for (int c = 0; c < C; ++c) {
+      const B* org[3] = {&ox[c], &oy[c], &oz[c]};
+      const B* inv[3] = {&ix[c], &iy[c], &iz[c]};
+      for (int a = 0; a < 3; ++a) {
+        f.fi[a][c] = *inv[a] * B(pad);
+        const B pn = *org[a] * *inv[a], pf = *org[a] * f.fi[a][c];
+        f.cn[a][c] = pn + (xsimd::abs(pn) * rel + tiny);
+        f.cf[a][c] = pf - (xsimd::abs(pf) * rel + tiny);
+      }
+    }
+    return f;
+  }
+
+  /// slabs() in the fused form; `far_pad` is tfar[c] times the exit padding.
+  [[gnu::always_inline]] void fused_slabs(const Fused& f, const WideNode<kWideN>& node, int j, const int np[3], int c,
+                                          B far_pad, B& entry, B& exit) const {
+    const B tnx = fused_mul_sub<Arch>(B(node.bounds[np[0]][j]), ix[c], f.cn[0][c]);
+    const B tny = fused_mul_sub<Arch>(B(node.bounds[np[1]][j]), iy[c], f.cn[1][c]);
+    const B tnz = fused_mul_sub<Arch>(B(node.bounds[np[2]][j]), iz[c], f.cn[2][c]);
+    const B tfx = fused_mul_sub<Arch>(B(node.bounds[np[0] ^ 1][j]), f.fi[0][c], f.cf[0][c]);
+    const B tfy = fused_mul_sub<Arch>(B(node.bounds[np[1] ^ 1][j]), f.fi[1][c], f.cf[1][c]);
+    const B tfz = fused_mul_sub<Arch>(B(node.bounds[np[2] ^ 1][j]), f.fi[2][c], f.cf[2][c]);
+    entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
+    exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, far_pad)));
   }
 
   /// The largest tfar of any lane.

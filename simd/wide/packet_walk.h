@@ -18,9 +18,10 @@ namespace volley::simd {
 // visited nearest first by the heuristic "any lane enters it before the current best",
 // or, for a query with kNearFirst = false (any hit), in slot order as single rays.
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
-// for the packet instead of per lane.
+// for the packet instead of per lane. Fused: no lane has a zero direction component either,
+// and each slab distance is one fused operation (PacketLanes::fused_slabs).
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query, bool Uniform, class Leaves>
+template <class Query, bool Uniform, bool Fused, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                             const detail::PacketSetup<K>& setup, Query& query) {
   using B = detail::FloatB<Arch>;
@@ -34,6 +35,14 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
 
   detail::PacketLanes<Arch, K> lanes(rays, setup, query);
   B* const tfar = lanes.tfar;
+  static_assert(Uniform || !Fused, "the fused slab test picks its planes once per packet");
+  using FusedLanes = typename detail::PacketLanes<Arch, K>::Fused;
+  [[maybe_unused]] const FusedLanes fused = [&] {
+    if constexpr (Fused)
+      return lanes.fuse(Robust ? core::kSlabExitPad : 1.0f, Robust);
+    else
+      return FusedLanes{};
+  }();
   // Uniform octant: the plane arrays of a valid lane's octant; otherwise each lane's octant.
   const int lane0 = std::countr_zero(valid);
   const int np[3] = {Uniform && setup.inv[0][lane0] < 0.0f ? 1 : 0, Uniform && setup.inv[1][lane0] < 0.0f ? 3 : 2,
@@ -93,7 +102,9 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
               continue;
             }
             B entry(0.0f), exit(0.0f);  // set below
-            if constexpr (Uniform) {
+            if constexpr (Fused) {
+              lanes.fused_slabs(fused, node, j, np, c, tfar[c] * pad, entry, exit);
+            } else if constexpr (Uniform) {
               lanes.slabs(node, j, np, c, pad, entry, exit);
             } else {
               const B ox = lanes.ox[c], oy = lanes.oy[c], oz = lanes.oz[c];
