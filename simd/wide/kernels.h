@@ -67,6 +67,14 @@ inline constexpr int kWidePacket = 16;
 inline constexpr int kPacketSwitchLanes = 3;
 
 namespace detail {
+
+/// Whether the packet walks test lanes in the single walk's fused form (one FMA per slab
+/// distance; PacketLanes::fused_slabs): on AVX-512. AVX2 has FMA too, but its 16 registers
+/// do not hold the form's nine constants beside the rest: kitchen shadow packets lost 6%
+/// there (perf/rays.md).
+template <class Arch>
+inline constexpr bool kFusedLanes = kHasFma<Arch> && kLanes<Arch> == 16;
+
 /// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
 enum class PacketWalk : std::uint32_t {
   mixed_octants = 0,  ///< the per-lane walk, each lane ordering children by its own octant

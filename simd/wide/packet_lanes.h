@@ -12,12 +12,6 @@ namespace volley::simd {
 
 namespace detail {
 
-/// Whether the packet walks test lanes in the fused form (PacketLanes::fused_slabs): on
-/// AVX-512. AVX2 has FMA too, but its 16 registers do not hold the form's nine constants
-/// per chunk beside the rest: kitchen shadow packets lost 6% there (perf/rays.md).
-template <class Arch>
-inline constexpr bool kFusedLanes = kHasFma<Arch> && kLanes<Arch> == 16;
-
 template <class Arch, int K>
 struct PacketLanes {
   using B = FloatB<Arch>;
