@@ -80,9 +80,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
       for (int c = 0; c < C; ++c) tfar[c].store_aligned(far_lanes + c * L);
       for (std::uint32_t b = bits; b != 0; b &= b - 1) {
         const int i = std::countr_zero(b);
-        const Ray r{
-            {rays.ox[i], rays.oy[i], rays.oz[i]}, rays.tmin[i], {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tmax[i]};
-        if (query.single(bvh, r, cur, i, far_lanes[i])) finished |= 1u << i;
+        if (query.single(bvh, prep, setup, cur, i, far_lanes[i])) finished |= 1u << i;
       }
       for (int c = 0; c < C; ++c) tfar[c] = B::load_aligned(far_lanes + c * L);
       if (finished == valid) return finished;

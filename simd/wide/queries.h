@@ -22,9 +22,10 @@
 //   p.leaf(prep, blocks, count, lanes, tfar)
 //                   the leaf's triangles for `lanes`; lowers their tfar, and returns the
 //                   lanes that are finished (their tfar set to -inf) and whether any tfar fell.
-//   p.single(bvh, ray, start, lane, far)
-//                   the subtree `start` for one lane by the single walk (few lanes left);
-//                   updates the lane's upper end `far`, true when the lane is finished.
+//   p.single(bvh, prep, setup, start, lane, far)
+//                   the subtree `start` for one lane of the prepared packet by the single
+//                   walk (few lanes left; Kernels::trace_lane); updates the lane's upper end
+//                   `far`, true when the lane is finished.
 #pragma once
 #include <bit>
 #include <cstdint>
@@ -218,8 +219,8 @@ struct InstancesPacket {
     return {AnyHit ? now : 0u, true};
   }
 
-  [[gnu::always_inline]] bool single(const InstanceView& top, const Ray& ray, std::uint32_t start, int i,
-                                     float& far) {
+  [[gnu::always_inline]] bool single(const InstanceView& top, const PreparedPacket<K>& prep,
+                                     const PacketSetup<K>& setup, std::uint32_t start, int i, float& far) {
     struct Lane {
       InstancesPacket& packet;
       int i;
@@ -234,7 +235,7 @@ struct InstancesPacket {
       return true;
     };
     InstancesRay<!AnyHit, AnyHit> q{{one, &lane}, far};
-    if (!Kernels::trace_single(top, ray, start, q)) return false;
+    if (!Kernels::trace_lane(top, prep, setup, i, start, q)) return false;
     hit |= 1u << i;
     far = AnyHit ? -std::numeric_limits<float>::infinity() : lane.bound;
     return AnyHit;
@@ -292,10 +293,11 @@ struct ClosestHitPacket {
     return {0, true};
   }
 
-  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int i, float& far) {
+  bool single(const typename Kernels::View& bvh, const PreparedPacket<K>& prep, const PacketSetup<K>& setup,
+              std::uint32_t start, int i, float& far) {
     Hit h{hits.t[i], hits.u[i], hits.v[i], hits.prim[i]};
     ClosestHitRay<Kernels> q{h};
-    if (Kernels::trace_single(bvh, ray, start, q)) {
+    if (Kernels::trace_lane(bvh, prep, setup, i, start, q)) {
       hits.t[i] = h.t, hits.u[i] = h.u, hits.v[i] = h.v, hits.prim[i] = h.prim;
       far = h.t;
     }
@@ -319,10 +321,11 @@ struct AllHitsPacket {
     Packet::all(prep, blocks, count, lanes, sink);
     return {0, false};
   }
-  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int i, float&) {
+  bool single(const typename Kernels::View& bvh, const PreparedPacket<K>& prep, const PacketSetup<K>& setup,
+              std::uint32_t start, int i, float&) {
     auto one = [this, i](std::uint32_t prim, float t, float u, float v) { sink(i, prim, t, u, v); };
     AllHitsRay<Kernels, decltype(one)> q{one};
-    Kernels::trace_single(bvh, ray, start, q);
+    Kernels::trace_lane(bvh, prep, setup, i, start, q);
     return false;
   }
 };
@@ -348,9 +351,10 @@ struct AnyHitPacket {
     return {now, true};
   }
 
-  bool single(const typename Kernels::View& bvh, const Ray& ray, std::uint32_t start, int, float& far) {
+  bool single(const typename Kernels::View& bvh, const PreparedPacket<K>& prep, const PacketSetup<K>& setup,
+              std::uint32_t start, int i, float& far) {
     AnyHitRay<Kernels> q;
-    if (!Kernels::trace_single(bvh, ray, start, q)) return false;
+    if (!Kernels::trace_lane(bvh, prep, setup, i, start, q)) return false;
     far = -std::numeric_limits<float>::infinity();
     return true;
   }

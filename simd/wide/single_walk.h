@@ -25,6 +25,31 @@ bool WideKernels<Arch, Test, Robust>::trace_single(const WideView<Leaves>& bvh, 
 
 template <class Arch, TriangleTest Test, bool Robust>
 template <class Query, class Leaves>
+bool WideKernels<Arch, Test, Robust>::trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
+                                                 const detail::PacketSetup<K>& setup, int i, std::uint32_t start,
+                                                 Query& query) {
+  const RayPacket<K>& r = prep.rays;
+  PreparedRay pr;
+  pr.ray = Ray{{r.ox[i], r.oy[i], r.oz[i]}, r.tmin[i], {r.dx[i], r.dy[i], r.dz[i]}, r.tmax[i]};
+  if constexpr (Test != TriangleTest::watertight) {
+    pr.k[0] = pr.k[1] = pr.k[2] = 0;
+    pr.s[0] = pr.s[1] = pr.s[2] = pr.sure[0] = pr.sure[1] = 0.0f;
+  } else {
+    for (int a = 0; a < 3; ++a) pr.k[a] = prep.k[a][i], pr.s[a] = prep.s[a][i];
+    const auto [lo, hi] = Query::kSureRange ? core::sure_quotient_range(pr.ray.tmin, pr.ray.tmax) : std::pair{0.0f, 0.0f};
+    pr.sure[0] = lo, pr.sure[1] = hi;
+  }
+  // (Lane 3 of the reciprocal is never read by the walk.)
+  const __m128 inv = _mm_setr_ps(setup.inv[0][i], setup.inv[1][i], setup.inv[2][i], 0.0f);
+  if (r.dx[i] != 0.0f && r.dy[i] != 0.0f && r.dz[i] != 0.0f)
+    walk<Query, true>(bvh, pr, inv, start, query);
+  else
+    walk<Query, false>(bvh, pr, inv, start, query);
+  return query.answer();
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+template <class Query, class Leaves>
 bool WideKernels<Arch, Test, Robust>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                 Query& query) {
   if (start == wide_ref::kEmptyRef) return query.answer();

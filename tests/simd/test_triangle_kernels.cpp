@@ -3,6 +3,8 @@
 // oracle over the same group.
 #include "simd/testing/triangle_kernels.h"
 
+#include <cstring>
+
 #include "simd_test_util.h"
 
 namespace {
@@ -92,6 +94,41 @@ TEST_CASE_TEMPLATE("TriangleKernels facade agrees with the oracle per group", Ar
     INFO(name(test));
     facade_agrees<Arch>(test);
   }
+}
+
+// The packet walks hand few lanes to the single-ray walk with the packet's own shear
+// (WideKernels::trace_lane), which must be the oracle's make_woop_ray lane by lane: the
+// same axes and the same quotients, bit for bit, ties of |d| and signs included.
+TEST_CASE_TEMPLATE("packet prepare: every lane's watertight shear is the oracle's", Arch, volley::simd::Sse42,
+                   volley::simd::Avx2, volley::simd::Avx512) {
+  if (skip_isa<Arch>()) return;
+  const auto kernels = TriangleKernels::create(TriangleTest::watertight, volley::simd::kIsaOf<Arch>);
+  REQUIRE(kernels);
+  Generator g(7);
+  std::vector<Ray> rays;
+  const float sizes[] = {1.0f, 0.5f, 2.0f, 1e-20f, 3e20f};
+  for (float x : sizes)
+    for (float y : sizes)
+      for (float z : sizes)
+        for (int signs = 0; signs < 8; ++signs)
+          rays.push_back(Ray{{1, 2, 3}, 0.0f, {signs & 1 ? -x : x, signs & 2 ? -y : y, signs & 4 ? -z : z}, 10.0f});
+  for (int i = 0; i < 200; ++i) rays.push_back(g.aimed(g.triangles(1), 0));
+  rays.push_back(Ray{{0, 0, 0}, 0.0f, {0.0f, -0.0f, 1.0f}, 1.0f});  // zero components
+  rays.push_back(Ray{{0, 0, 0}, 0.0f, {-0.0f, 2.0f, 0.0f}, 1.0f});
+  std::size_t wrong = 0;
+  for (std::size_t first = 0; first < rays.size(); first += volley::simd::kPacketSize) {
+    const std::size_t n = std::min<std::size_t>(volley::simd::kPacketSize, rays.size() - first);
+    volley::simd::Packet packet;
+    volley::simd::load(packet, rays.data() + first, n);
+    volley::simd::PreparedPacket16 prepared;
+    kernels->prepare(packet, prepared);
+    for (std::size_t i = 0; i < n; ++i) {
+      const volley::simd::PreparedRay want = volley::simd::prepare_ray(rays[first + i]);
+      for (int a = 0; a < 3; ++a)
+        wrong += prepared.k[a][i] != want.k[a] || std::memcmp(&prepared.s[a][i], &want.s[a], sizeof(float)) != 0;
+    }
+  }
+  CHECK(wrong == 0);
 }
 
 TEST_CASE("TriangleKernels::create rejects unresolved ISAs and bad groups") {
