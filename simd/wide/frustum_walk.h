@@ -35,9 +35,10 @@ namespace volley::simd {
 // whenever some lane's own padded test would. Leaves are tested per lane (the oracle's test
 // exactly, against each lane's own tfar) to pick the lanes handed to the block kernels, and
 // every subtree popped is tested per lane again, against tfar as the hits since its push
-// have left it: a subtree no lane enters is skipped, one that three lanes or fewer enter
-// goes to the single-ray walk lane by lane, as in the per-lane walk. Without that second
-// test the frustum opened twice the leaves on the kitchen's primary rays (perf/traversal.md).
+// have left it: a subtree no lane enters is skipped, one that few lanes enter
+// (kPacketSwitchLanes or fewer) goes to the single-ray walk lane by lane, as in the per-lane
+// walk. Without that second test the frustum opened twice the leaves on the kitchen's
+// primary rays (perf/traversal.md).
 template <class Arch, TriangleTest Test, bool Robust>
 template <class Query, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,

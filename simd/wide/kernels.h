@@ -64,7 +64,7 @@ inline constexpr int kWidePacket = 16;
 /// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
 /// lanes (or fewer) are still active in it (Embree's "switch threshold"; the value:
 /// perf/traversal.md).
-inline constexpr int kPacketSwitchLanes = 3;
+inline constexpr int kPacketSwitchLanes = 2;
 
 namespace detail {
 
