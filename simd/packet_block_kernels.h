@@ -29,9 +29,11 @@ struct PacketKernels {
   /// Closest hit of every active lane against triangle j of `block` alone.
   static void intersect_triangle(const PreparedPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
   /// The lanes of `active` (ANDed with rays.rays.active) that some triangle of
-  /// blocks[0 .. count) occludes (tmin <= t < tmax). Stops as soon as all are occluded.
+  /// blocks[0 .. count) occludes (tmin <= t < tmax), the last block's first `last`
+  /// triangles only (a sparse last block: its padding untested). Stops as soon as all are
+  /// occluded.
   static std::uint32_t occluded(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count,
-                                std::uint32_t active);
+                                std::uint32_t active, int last = BW);
   /// Every triangle of blocks[0 .. count) that the lanes of `active` (ANDed with
   /// rays.rays.active) hit with tmin <= t < tmax by the crossing test
   /// (detail::CrossingTestOf): sink(lane, prim, t, u, v) for each, triangle by triangle.
@@ -165,7 +167,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K
 
 template <class Arch, TriangleTest Test, int K, int BW>
 std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
-                                                         std::uint32_t count, std::uint32_t active) {
+                                                         std::uint32_t count, std::uint32_t active, int last) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
@@ -187,10 +189,12 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
       else
         return 0;
     }();
-    // Any hit ends a lane; the chunk ends when every active lane has one.
+    // Any hit ends a lane; the chunk ends when every active lane has one. The last block
+    // ends at its `last` triangle.
     for (std::uint32_t b = 0; b < count; ++b) {
       const Block& block = blocks[b];
-      for (int j = 0; j < W; ++j) {
+      const int used = b + 1 == count ? last : W;
+      for (int j = 0; j < used; ++j) {
         if constexpr (T::kDecision == detail::Decision::quotient) {
           const auto d = T::depth(r, T::broadcast_tri(block, j, r));
           if (xsimd::none(d.inside)) continue;

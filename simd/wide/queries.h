@@ -340,10 +340,11 @@ struct AnyHitPacket {
 
   B bound(int, B tmax) const { return tmax; }
 
-  /// As ClosestHitPacket::leaf, with PacketKernels::occluded.
+  /// PacketKernels::occluded, a sparse last block's padding untested (sparse_tail).
   LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                  std::uint32_t lanes, B* tfar) {
-    const std::uint32_t now = occluded(prep, blocks, count, lanes);
+    const int tail = sparse_tail<Kernels>(blocks, count);
+    const std::uint32_t now = Packet::occluded(prep, blocks, count, lanes, tail != 0 ? tail : Kernels::W);
     if (now == 0) return {0, false};
     for (int c = 0; c < K / L; ++c)
       tfar[c] = xsimd::select(mask_from_bits<typename Kernels::Isa>((now >> (c * L)) & ((1u << L) - 1u)),
@@ -357,25 +358,6 @@ struct AnyHitPacket {
     if (!Kernels::trace_lane(bvh, prep, setup, i, start, q)) return false;
     far = -std::numeric_limits<float>::infinity();
     return true;
-  }
-
- private:
-  static std::uint32_t occluded(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
-                                std::uint32_t lanes) {
-    const int tail = sparse_tail<Kernels>(blocks, count);
-    const std::uint32_t whole = tail != 0 ? count - 1 : count;
-    std::uint32_t hit = whole != 0 ? Packet::occluded(prep, blocks, whole, lanes) : 0u;
-    if (tail == 0 || hit == lanes) return hit;
-    // Any hit within [tmin, tmax) of a lane: a closest-hit test against a fresh +inf bound.
-    HitPacket<K> scratch;
-    for (int i = 0; i < K; ++i) scratch.t[i] = std::numeric_limits<float>::infinity(), scratch.prim[i] = kInvalidPrim;
-    const std::uint32_t saved = prep.rays.active;
-    prep.rays.active = lanes & ~hit;
-    for (int j = 0; j < tail; ++j) Packet::intersect_triangle(prep, blocks[whole], j, scratch);
-    prep.rays.active = saved;
-    for (int i = 0; i < K; ++i)
-      if (scratch.prim[i] != kInvalidPrim) hit |= 1u << i;
-    return hit & lanes;
   }
 };
 
