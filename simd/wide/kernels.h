@@ -186,7 +186,7 @@ struct WideKernels {
   static bool trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start, Query& query);
   /// trace_single for valid lane i of a screened and prepared packet: the lane's prepared
   /// ray and reciprocal are taken from the packet, whose prepare is make_woop_ray lane by
-  /// lane (the values prepare_single computes; tests/accel), so no division is repeated.
+  /// lane (the values prepare_single computes; tests/simd), so no division is repeated.
   /// The packet walks' hand-offs of few lanes.
   template <class Query, class Leaves>
   static bool trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,

@@ -81,8 +81,9 @@ int used_lanes(const Block& block) {
 }
 
 /// The triangles of a leaf's last block when it is at most half full, else 0: the packet
-/// leaves test those triangle by triangle (padding lanes cost a full test each in the block
-/// form), the blocks before it (count - 1 of them, or all when 0) as blocks.
+/// leaves leave that block's padding untested (a padding lane costs a full test in the
+/// block form). Closest hits test those triangles one by one after the blocks before it
+/// (count - 1 of them, or all when 0); occlusion stops the block kernel at the last one.
 template <class Kernels>
 int sparse_tail(const typename Kernels::Block* blocks, std::uint32_t count) {
   const int used = used_lanes<typename Kernels::SingleArch>(blocks[count - 1]);
