@@ -91,8 +91,8 @@ template <class Arch>
 }
 
 /// The eight floats of the rays ids[0 .. L) as eight L-lane registers (out[f] lane l =
-/// data[8 ids[l] + f]): transposed from whole-ray loads on AVX-512 and AVX2, where that is
-/// 1.2x faster on bounce-ray streams than eight gathers (perf/rays.md), gathered elsewhere.
+/// data[8 ids[l] + f]): transposed from whole-ray loads, which on AVX-512 and AVX2 is 1.2x
+/// faster on bounce-ray streams than eight gathers (perf/rays.md).
 template <class Arch>
 [[gnu::always_inline]] inline void load_rays(const float* data, const std::uint32_t* ids, FloatB<Arch> out[8]) {
   if constexpr (kLanes<Arch> == 16) {
@@ -104,21 +104,25 @@ template <class Arch>
     transpose_rays8<Arch>(data, ids, cols);
     for (int f = 0; f < 8; ++f) out[f] = cols[f];
   } else {
-    const auto at = IntB<Arch>::load_aligned(reinterpret_cast<const std::int32_t*>(ids)) * IntB<Arch>(8);
-    for (int f = 0; f < 8; ++f) out[f] = FloatB<Arch>::gather(data + f, at);
+    // SSE4.2: two 4 x 4 transposes, of the rays' first and second halves.
+    __m128 lo[4], hi[4];
+    for (int k = 0; k < 4; ++k) {
+      lo[k] = _mm_load_ps(data + 8 * std::size_t{ids[k]});
+      hi[k] = _mm_load_ps(data + 8 * std::size_t{ids[k]} + 4);
+    }
+    _MM_TRANSPOSE4_PS(lo[0], lo[1], lo[2], lo[3]);
+    _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
+    for (int f = 0; f < 4; ++f) out[f] = lo[f], out[4 + f] = hi[f];
   }
 }
 
 /// Stores the ids of `bits` (lane order) at dst; returns how many.
 template <class Arch>
-[[gnu::always_inline]] inline int compress_ids(std::uint32_t* dst, const std::uint32_t* ids, IntB<Arch> v,
-                                               std::uint32_t bits) {
+[[gnu::always_inline]] inline int compress_ids(std::uint32_t* dst, IntB<Arch> v, std::uint32_t bits) {
   if constexpr (kLanes<Arch> == 16) {
-    (void)ids;
     _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(static_cast<__mmask16>(bits), v));
     return std::popcount(bits);
   } else if constexpr (kLanes<Arch> == 8) {
-    (void)ids;
     // vpermd reads the low 3 bits of each index. (data()[]: with _GLIBCXX_ASSERTIONS
     // std::array's operator[] is an out-of-line weak function, which a per-ISA object must
     // not define.)
@@ -127,10 +131,10 @@ template <class Arch>
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, lanes));
     return std::popcount(bits);
   } else {
-    (void)v;
-    int n = 0;
-    for (; bits != 0; bits &= bits - 1) dst[n++] = ids[std::countr_zero(bits)];
-    return n;
+    // (data(): see above.)
+    const __m128i control = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kCompressBytes4.data() + 16 * bits));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst), _mm_shuffle_epi8(v, control));
+    return std::popcount(bits);
   }
 }
 
@@ -239,7 +243,7 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
           const M hit = valid & (entry <= exit);
           const std::uint32_t bits = detail::bits_from_mask<Arch>(hit);
           if constexpr (Query::kNearFirst) entry_sum[j] = entry_sum[j] + xsimd::select(hit, entry, B(0.0f));
-          child_count[j] += detail::compress_ids<Arch>(split + j * cap + child_count[j], ids, idx, bits);
+          child_count[j] += detail::compress_ids<Arch>(split + j * cap + child_count[j], idx, bits);
         }
       }
       // Push order: the child walked first goes last (farthest mean entry first).

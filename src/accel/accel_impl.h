@@ -234,10 +234,8 @@ struct Accel::Impl {
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
   /// Streams hand their incoherent runs to the stream walk (simd/wide/stream_walk.h, see
-  /// stream.cpp): a scene that is one wide BVH (wide_only) on AVX-512 or AVX2 (on SSE4.2,
-  /// with no permute of 32-bit lanes to compress the lists, it measured slower than single
-  /// rays: perf/rays.md); set with wide_only. A stream
-  /// needs at least kStreamWalkRays such rays.
+  /// stream.cpp): a scene that is one wide BVH (wide_only) on a SIMD ISA (AVX-512, AVX2,
+  /// SSE4.2); set with wide_only. A stream needs at least kStreamWalkRays such rays.
   bool stream_walk = false;
   static constexpr std::size_t kStreamWalkRays = 256;
   AccelInfo info() const;

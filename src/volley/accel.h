@@ -185,10 +185,11 @@ class VOLLEY_API Accel {
   /// nothing is hit; every entry written). Policy: the stream is cut into runs of 16
   /// consecutive rays (the rest ray by ray). A run whose directions share one octant is
   /// traced as a packet (primary rays in 4x4 blocks, shadow rays toward one light). On
-  /// AVX-512 and AVX2, in a scene of one BVH (no instances, polygons or geometry masks of several
-  /// values), the runs whose directions spread across two or more axis planes (bounce and
-  /// ambient-occlusion rays), when they hold 256 rays or more, walk the tree together by
-  /// the stream walk (docs/kernels.md; +20-44% on diffuse rays, perf/rays.md). Other runs:
+  /// AVX-512, AVX2 and SSE4.2, in a scene of one BVH (no instances, polygons or geometry
+  /// masks of several values), the runs whose directions spread across two or more axis
+  /// planes (bounce and ambient-occlusion rays), when they hold 256 rays or more, walk the
+  /// tree together by the stream walk (docs/kernels.md; 1.2-2.3x the rate ray by ray on
+  /// diffuse rays, perf/rays.md). Other runs:
   /// closest hits ray by ray, which was faster for diffuse rays (perf/traversal.md);
   /// occlusion on AVX-512, and every run of a scene with instances, as a packet (shadow
   /// rays straddling one axis plane gained on AVX-512; with instances a packet shares the

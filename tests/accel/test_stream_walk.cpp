@@ -139,8 +139,9 @@ TEST_CASE("stream walk: rays touching leaf boxes at vertices need its slab paddi
 }
 
 TEST_CASE("stream walk: Accel's streams of bounce rays answer as single rays, masks and a short tail included") {
-  // On AVX-512 and AVX2 Accel hands these runs (directions across two or more axis planes) to the
-  // stream walk; elsewhere they go ray by ray. Either way every answer is the single ray's.
+  // On the SIMD ISAs Accel hands these runs (directions across two or more axis planes) to the
+  // stream walk; on the scalar oracle they go ray by ray. Either way every answer is the
+  // single ray's.
   const Soup soup = random_soup(2000, 41);
   const std::vector<Ray> rays = bounce_rays(3000 + 7, 11.0f, 13);
   for (Isa isa : simd_isas()) {
