@@ -145,7 +145,7 @@ void Accel::Impl::finish_build() {
   wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances
                   ? layers[0].triangle_engine->wide()
                   : nullptr;
-  stream_walk = wide_only != nullptr && (isa == Isa::avx512 || isa == Isa::avx2 || isa == Isa::sse42);
+  stream_walk = wide_only != nullptr;  // wide kernels exist on every SIMD ISA, all with the walk
   one_geometry = geometries.size() == 1 && !geometries[0].instance;
   id_starts.clear();
   for (std::size_t g = 0; g < geometries.size(); ++g)
