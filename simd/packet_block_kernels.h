@@ -196,10 +196,12 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
       const int used = b + 1 == count ? last : W;
       for (int j = 0; j < used; ++j) {
         if constexpr (T::kDecision == detail::Decision::quotient) {
-          const auto d = T::depth(r, T::broadcast_tri(block, j, r));
-          if (xsimd::none(d.inside)) continue;
-          hit = hit | T::sure_hit(d, sure);
-          const M rest = T::prefilter(r, d, upper) & ~hit;
+          const auto d = T::template depth<false>(r, T::broadcast_tri(block, j, r));
+          const M cand = T::prefilter(r, d, upper) & ~hit;
+          if (xsimd::none(cand)) continue;
+          const M now = T::sure_hit(d, sure) & cand;
+          hit = hit | now;
+          const M rest = cand & ~now;
           if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
         } else {
           const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);

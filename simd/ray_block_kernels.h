@@ -165,11 +165,11 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     // sure range comes prepared with the ray (formed per call it was measurably slower).
     const auto sure = T::sure_range(ray);
     for (std::uint32_t b = 0; b < count; ++b) {
-      const auto d = T::depth(rays, T::load_block(blocks[b], rays));
-      if (xsimd::none(d.inside)) continue;
+      const auto d = T::template depth<false>(rays, T::load_block(blocks[b], rays));
+      const auto cand = T::prefilter(rays, d, upper);
+      if (xsimd::none(cand)) continue;
       if (xsimd::any(T::sure_hit(d, sure))) return true;
-      std::uint32_t bits = detail::bits_from_mask<Arch>(T::prefilter(rays, d, upper));
-      if (bits == 0) continue;
+      std::uint32_t bits = detail::bits_from_mask<Arch>(cand);
       alignas(64) float ts[W], dens[W];
       d.ts.store_aligned(ts);
       d.det.store_aligned(dens);

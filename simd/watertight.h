@@ -114,6 +114,8 @@ struct WatertightTest {
   /// test()'s steps up to t det, for the any-hit forms. Both share edges(); the rest is
   /// written out twice on purpose: test() built on depth() ran more instructions
   /// (perf/traversal.md).
+  /// EarlyExit: return as soon as no lane is inside (the rest unset).
+  template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static Depth depth(const Rays& r, const Tris& tri);
   /// test()'s prefilter on the inside lanes of `d`.
   [[gnu::always_inline]] inline static M prefilter(const Rays& r, const Depth& d, B upper) {
@@ -203,6 +205,7 @@ auto WatertightTest<Arch, Crossing>::edges(const Rays& r, const Tris& tri, M& in
 }
 
 template <class Arch, bool Crossing>
+template <bool EarlyExit>
 auto WatertightTest<Arch, Crossing>::depth(const Rays& r, const Tris& tri) -> Depth {
   M inside;
   Edges e = edges(r, tri, inside);
@@ -213,7 +216,7 @@ auto WatertightTest<Arch, Crossing>::depth(const Rays& r, const Tris& tri) -> De
   d.ad = xsimd::abs(d.det);
   d.inside = and_cmp<Cmp::le, Arch>(inside, d.ad, B(std::numeric_limits<float>::max()));
   d.u = e.v, d.v = e.w;
-  if (xsimd::none(d.inside)) return d;
+  if (EarlyExit && xsimd::none(d.inside)) return d;
   const B az = r.sz * tri.akz, bz = r.sz * tri.bkz, cz = r.sz * tri.ckz;
   d.ts = depth_sum(e, az, bz, cz);
   d.ts_s = d.ts ^ (d.det & B(-0.0f));
