@@ -4,11 +4,15 @@
 // (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
 // The forms only tests use are in simd/testing/isa_avx2.cpp.
 #include "simd/block_kernels.h"
+#include "simd/packet_load.h"
 
 namespace volley::simd {
 
 template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
 template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
 template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
+
+// volley::load of whole packets (src/accel/packet_load.cpp dispatches).
+template struct PacketLoad<Avx2>;
 
 }  // namespace volley::simd

@@ -1,5 +1,6 @@
 // SoA packets and triangle blocks: AoS conversion, inert padding, alignment, and the
 // block packing (values the oracle computes, NaN padding, degenerate lanes).
+#include "simd/packet_load.h"
 #include "simd_test_util.h"
 
 namespace {
@@ -37,7 +38,62 @@ void packet_round_trip() {
   CHECK(out[1 % K].t == 2.0f);
 }
 
+/// Rays whose floats are all different bit patterns, NaN payloads, infinities and -0
+/// among them, starting 4 bytes past a 64-byte line (the whole-packet loads are unaligned).
+struct OddRays {
+  alignas(64) unsigned char bytes[sizeof(Ray) * 17 + 4];
+  const Ray* rays() const { return reinterpret_cast<const Ray*>(bytes + 4); }
+  OddRays() {
+    const float specials[] = {std::numeric_limits<float>::quiet_NaN(), kInf, -kInf, -0.0f,
+                              std::numeric_limits<float>::denorm_min()};
+    for (int i = 0; i < 17 * 8; ++i) {
+      std::uint32_t b = std::bit_cast<std::uint32_t>(float(i) * 1.25f - 40.0f);
+      if (i % 7 == 3) b = std::bit_cast<std::uint32_t>(specials[(i / 7) % 5]) ^ (i % 2 ? 0x5u : 0u);
+      std::memcpy(bytes + 4 + 4 * i, &b, 4);
+    }
+  }
+};
+
+/// Every ISA's whole-packet load against the header's lane-by-lane template, bit for bit,
+/// and the library's load (the overload) for every count.
+template <int K>
+void whole_packet_loads(const OddRays& src) {
+  RayPacket<K> expect;
+  volley::load<K>(expect, src.rays(), K);
+  const auto same = [](const RayPacket<K>& a, const RayPacket<K>& b) {
+    return std::memcmp(&a, &b, offsetof(RayPacket<K>, active)) == 0 && a.active == b.active;
+  };
+  const auto check_isa = [&](auto arch) {
+    using Arch = decltype(arch);
+    if (!volley::simd::cpu_has(volley::simd::kIsaOf<Arch>)) return;
+    RayPacket<K> got;
+    std::memset(&got, 0xab, sizeof got);
+    volley::simd::PacketLoad<Arch>::whole(got, src.rays());
+    CAPTURE(K);
+    CAPTURE(volley::simd::kIsaOf<Arch>);
+    CHECK(same(got, expect));
+  };
+  check_isa(volley::simd::Sse42{});
+  check_isa(volley::simd::Avx2{});
+  check_isa(volley::simd::Avx512{});
+  for (int count = 0; count <= K; ++count) {
+    RayPacket<K> lanes, got;
+    volley::load<K>(lanes, src.rays(), count);
+    std::memset(&got, 0xab, sizeof got);
+    volley::load(got, src.rays(), count);
+    CAPTURE(count);
+    CHECK(same(got, lanes));
+  }
+}
+
 }  // namespace
+
+TEST_CASE("whole packets load by transposes as the lane-by-lane load does, on every ISA") {
+  const OddRays src;
+  whole_packet_loads<4>(src);
+  whole_packet_loads<8>(src);
+  whole_packet_loads<16>(src);
+}
 
 TEST_CASE("ray packets load AoS rays, make padding lanes inert, store hits back") {
   packet_round_trip<4>();
