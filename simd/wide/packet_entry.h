@@ -74,10 +74,11 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
     const B ox = B::load_aligned(rays.ox + o), oy = B::load_aligned(rays.oy + o), oz = B::load_aligned(rays.oz + o);
     const B dx = B::load_aligned(rays.dx + o), dy = B::load_aligned(rays.dy + o), dz = B::load_aligned(rays.dz + o);
     const B tmin = B::load_aligned(rays.tmin + o), tmax = B::load_aligned(rays.tmax + o);
-    // Finite: x - x is 0, NaN for Inf and NaN. Not NaN: x == x.
-    const M ok = detail::mask_from_bits<Arch>((rays.active >> o) & kChunkBits) & ((ox - ox) == zero) &
-                 ((oy - oy) == zero) & ((oz - oz) == zero) & ((dx - dx) == zero) & ((dy - dy) == zero) &
-                 ((dz - dz) == zero) & (tmin == tmin) & (tmax == tmax);
+    // Finite: x - x is 0, NaN for Inf and NaN, so the sum of the six is 0 only when all are
+    // finite (summed as a tree: one compare instead of a chain of six). Not NaN: x == x.
+    const B finite = (((ox - ox) + (oy - oy)) + ((oz - oz) + (dx - dx))) + ((dy - dy) + (dz - dz));
+    const M ok = (detail::mask_from_bits<Arch>((rays.active >> o) & kChunkBits) & (finite == zero)) &
+                 ((tmin == tmin) & (tmax == tmax));
     // The oracle's reciprocal and octant (sign bit of 1 / dir: 1 / -0 = -inf < 0).
     const B ix = B(1.0f) / dx, iy = B(1.0f) / dy, iz = B(1.0f) / dz;
     ix.store_aligned(setup.inv[0] + o);
