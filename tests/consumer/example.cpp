@@ -19,7 +19,7 @@ int main() {
     for (int i = 0; i < 16; ++i) rays[i] = {{(i + 0.5f) / 16, 0.1f, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, 100.0f};
     volley::RayPacket<16> packet;  // SoA, 64-byte aligned
     volley::HitPacket<16> hits;
-    volley::load(packet, rays, 16);
+    volley::load(packet, rays, 16);  // AoS to SoA: the library's transposes for whole packets
     volley::reset(hits);  // t = +inf: search the whole interval
     accel.intersect(packet, hits);
     int hit_count = 0;
