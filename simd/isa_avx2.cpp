@@ -4,7 +4,7 @@
 // (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
 // The forms only tests use are in simd/testing/isa_avx2.cpp.
 #include "simd/block_kernels.h"
-#include "simd/packet_load.h"
+#include "simd/packet_convert.h"
 
 namespace volley::simd {
 
@@ -12,7 +12,7 @@ template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
 template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
 template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
 
-// volley::load of whole packets (src/accel/packet_load.cpp dispatches).
-template struct PacketLoad<Avx2>;
+// volley::load and volley::store of whole packets (src/accel/packet_convert.cpp dispatches).
+template struct PacketConvert<Avx2>;
 
 }  // namespace volley::simd

@@ -125,4 +125,8 @@ void store(const HitPacket<K>& hits, Hit* out, int count) {
   for (int i = 0; i < count && i < K; ++i) out[i] = hit_of(hits, i);
 }
 
+/// store() for packets of 16, in the library: the same records, with a whole packet
+/// transposed by AVX-512 where the CPU has it. Picked by overload resolution as load's.
+VOLLEY_API void store(const HitPacket<16>& hits, Hit* out, int count);
+
 }  // namespace volley

@@ -10,7 +10,8 @@
 #   volley::Accel members but Accel::Impl's     the C++ API (accel.h); templates carry
 #                                               their return type in the demangled name
 #   volley::to_string / parse_isa / parse_triangle_test   (options.h)
-#   volley::load of RayPacket<16>, <8>, <4>     (packet.h: the whole-packet transposes)
+#   volley::load of RayPacket<16>, <8>, <4>, volley::store of HitPacket<16>
+#                                               (packet.h: the whole-packet transposes)
 #   typeinfo, typeinfo name and vtable of volley::Error and volley::OutOfMemory (accel.h: catch across the boundary)
 set -eu
 
@@ -25,6 +26,7 @@ api='^volley_[a-z0-9_]+$'
 api="$api|^((void|unsigned int|bool) )?volley::Accel::(Accel\(|~Accel\(|[a-z])"
 api="$api|^volley::(to_string|parse_isa|parse_triangle_test)\("
 api="$api|^volley::load\(volley::RayPacket<(16|8|4)>&, volley::Ray const\*, int\)$"
+api="$api|^volley::store\(volley::HitPacket<16> const&, volley::Hit\*, int\)$"
 api="$api|^(typeinfo|typeinfo name|vtable) for volley::(Error|OutOfMemory)$"
 
 status=0

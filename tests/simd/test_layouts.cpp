@@ -1,6 +1,6 @@
 // SoA packets and triangle blocks: AoS conversion, inert padding, alignment, and the
 // block packing (values the oracle computes, NaN padding, degenerate lanes).
-#include "simd/packet_load.h"
+#include "simd/packet_convert.h"
 #include "simd_test_util.h"
 
 namespace {
@@ -68,7 +68,7 @@ void whole_packet_loads(const OddRays& src) {
     if (!volley::simd::cpu_has(volley::simd::kIsaOf<Arch>)) return;
     RayPacket<K> got;
     std::memset(&got, 0xab, sizeof got);
-    volley::simd::PacketLoad<Arch>::whole(got, src.rays());
+    volley::simd::PacketConvert<Arch>::whole(got, src.rays());
     CAPTURE(K);
     CAPTURE(volley::simd::kIsaOf<Arch>);
     CHECK(same(got, expect));
@@ -86,7 +86,42 @@ void whole_packet_loads(const OddRays& src) {
   }
 }
 
+/// A packet of 16 hits whose fields are all different bit patterns (NaN payloads among
+/// them): AVX-512's whole-packet store and the library's store for every count against the
+/// header's lane-by-lane template, record by record.
+void whole_packet_stores() {
+  HitPacket<16> hits;
+  for (int i = 0; i < 16; ++i) {
+    hits.t[i] = i % 5 == 2 ? std::bit_cast<float>(0x7fc00000u + std::uint32_t(i)) : float(i) + 0.5f;
+    hits.u[i] = -float(i) * 0.25f;
+    hits.v[i] = i % 3 == 0 ? -0.0f : float(i) * 0.125f;
+    hits.prim[i] = 1000u + std::uint32_t(i);
+    hits.geom[i] = 2000u + std::uint32_t(i);
+    hits.inst[i] = i % 4 == 0 ? volley::kInvalidId : 3000u + std::uint32_t(i);
+  }
+  Hit expect[17], got[17];
+  std::memset(expect, 0xcd, sizeof expect);
+  volley::store<16>(hits, expect, 16);
+  if (volley::simd::cpu_has(volley::Isa::avx512)) {
+    std::memset(got, 0xcd, sizeof got);
+    volley::simd::PacketConvert<volley::simd::Avx512>::store(hits, got);
+    CHECK(std::memcmp(got, expect, sizeof got) == 0);  // record 16 untouched
+  }
+  for (int count = 0; count <= 16; ++count) {
+    std::memset(expect, 0xcd, sizeof expect);
+    volley::store<16>(hits, expect, count);
+    std::memset(got, 0xcd, sizeof got);
+    volley::store(hits, got, count);
+    CAPTURE(count);
+    CHECK(std::memcmp(got, expect, sizeof got) == 0);
+  }
+}
+
 }  // namespace
+
+TEST_CASE("a whole packet of hits stores by a transpose as the lane-by-lane store does") {
+  whole_packet_stores();
+}
 
 TEST_CASE("whole packets load by transposes as the lane-by-lane load does, on every ISA") {
   const OddRays src;
