@@ -163,6 +163,8 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     // Any hit decides on det-scaled values: a lane surely in [tmin, tmax) ends the search
     // with no division; only lanes within a few ulps of either end (rare) are divided. The
     // sure range comes prepared with the ray (formed per call it was measurably slower).
+    // One branch per block, on the range prefilter, as the packet form (no exit after the
+    // edge test, whose outcome the predictor cannot learn for shadow rays).
     const auto sure = T::sure_range(ray);
     for (std::uint32_t b = 0; b < count; ++b) {
       const auto d = T::template depth<false>(rays, T::load_block(blocks[b], rays));

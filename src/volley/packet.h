@@ -1,6 +1,7 @@
 // volley public API: SoA packets of K rays (K = 4, 8, 16) and their hits, and the
 // conversions from and to the AoS volley::Ray / volley::Hit. Plain data, C++17, standard
-// library only: the kernels (simd/), the renderer and embedders share these types.
+// library only: the kernels (simd/), the renderer and embedders share these types. The
+// library adds faster overloads of load() and store() for whole packets (declared below).
 #pragma once
 #include <cstdint>
 #include <limits>
