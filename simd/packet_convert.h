@@ -42,8 +42,10 @@ void PacketConvert<Arch>::transpose(RayPacket<K>& packet, const Ray* rays) {
   float* const column[8] = {packet.ox, packet.oy, packet.oz, packet.tmin, packet.dx, packet.dy, packet.dz, packet.tmax};
   // The next K rays requested now: callers convert consecutive packets, and the hardware's
   // stream prefetch falls behind at a packet per query (a prefetch past the caller's
-  // array is harmless: it never faults).
-  for (int k = 0; k < K / 2; ++k) _mm_prefetch(reinterpret_cast<const char*>(data + 8 * K + 16 * k), _MM_HINT_T0);
+  // array is harmless: it never faults; the address is formed as an integer, since a
+  // pointer past the array's end would be undefined).
+  const std::uintptr_t next = reinterpret_cast<std::uintptr_t>(rays + K);
+  for (int k = 0; k < K / 2; ++k) _mm_prefetch(reinterpret_cast<const char*>(next + 64 * k), _MM_HINT_T0);
   if constexpr (K == 16 && kLanes<Arch> == 16) {
     __m512 rows[8], cols[8];  // rows[k]: rays 2k and 2k + 1, one 64-byte load
     for (int k = 0; k < 8; ++k) rows[k] = _mm512_loadu_ps(data + 16 * k);
@@ -127,7 +129,8 @@ void PacketConvert<Arch>::store(const HitPacket<16>& hits, Hit* out) {
     // last store masked, so that nothing past out[15] is written.
     float* const dst = reinterpret_cast<float*>(out);  // a Hit is six 4-byte fields (volley/ray.h)
     // The next 16 records requested for writing, as the next rays in transpose().
-    for (int k = 0; k < 6; ++k) __builtin_prefetch(dst + 96 + 16 * k, 1, 3);
+    const std::uintptr_t next = reinterpret_cast<std::uintptr_t>(out + 16);
+    for (int k = 0; k < 6; ++k) __builtin_prefetch(reinterpret_cast<const void*>(next + 64 * k), 1, 3);
     for (int k = 0; k < 7; ++k) _mm512_storeu_ps(dst + 12 * k, pairs[k]);
     _mm512_mask_storeu_ps(dst + 84, 0x0fff, pairs[7]);
   } else {
