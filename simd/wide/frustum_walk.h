@@ -57,12 +57,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
   detail::PacketLanes<Arch, K> lanes(rays, setup, query);
   constexpr bool kFused = detail::kFusedLanes<Arch>;
   using FusedLanes = typename detail::PacketLanes<Arch, K>::Fused;
-  [[maybe_unused]] const FusedLanes fused = [&] {
-    if constexpr (kFused)
-      return lanes.fuse(pad1, Robust);
-    else
-      return FusedLanes{};
-  }();
+  [[maybe_unused]] const FusedLanes fused = lanes.template fuse_if<kFused>(pad1, Robust);
   B olo[3] = {pinf, pinf, pinf}, ohi[3] = {ninf, ninf, ninf}, ilo[3] = {pinf, pinf, pinf}, ihi[3] = {ninf, ninf, ninf};
   B tmin_lo = pinf;
   for (int c = 0; c < C; ++c) {

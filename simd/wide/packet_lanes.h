@@ -83,6 +83,15 @@ struct PacketLanes {
     return f;
   }
 
+  /// fuse() where the walk takes the fused form (Fused), else nothing to set up.
+  template <bool UseFused>
+  Fused fuse_if(float pad, bool robust) const {
+    if constexpr (UseFused)
+      return fuse(pad, robust);
+    else
+      return Fused{};
+  }
+
   /// slabs() in the fused form; `far_pad` is tfar[c] times the exit padding.
   [[gnu::always_inline]] void fused_slabs(const Fused& f, const WideNode<kWideN>& node, int j, const int np[3], int c,
                                           B far_pad, B& entry, B& exit) const {

@@ -37,12 +37,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   B* const tfar = lanes.tfar;
   static_assert(Uniform || !Fused, "the fused slab test picks its planes once per packet");
   using FusedLanes = typename detail::PacketLanes<Arch, K>::Fused;
-  [[maybe_unused]] const FusedLanes fused = [&] {
-    if constexpr (Fused)
-      return lanes.fuse(Robust ? core::kSlabExitPad : 1.0f, Robust);
-    else
-      return FusedLanes{};
-  }();
+  [[maybe_unused]] const FusedLanes fused = lanes.template fuse_if<Fused>(Robust ? core::kSlabExitPad : 1.0f, Robust);
   // Uniform octant: the plane arrays of a valid lane's octant; otherwise each lane's octant.
   const int lane0 = std::countr_zero(valid);
   const int np[3] = {Uniform && setup.inv[0][lane0] < 0.0f ? 1 : 0, Uniform && setup.inv[1][lane0] < 0.0f ? 3 : 2,
