@@ -152,6 +152,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             if (child == wide_ref::kEmptyRef) break;  // used children come first
             B dist[C];
             if (!enter(j, dist)) continue;
+            if (child & wide_ref::kLeafBit) wide_ref::request_leaf(bvh.blocks, child);
             if (next == wide_ref::kEmptyRef) {
               next = child;
               for (int c = 0; c < C; ++c) next_dist[c] = dist[c];

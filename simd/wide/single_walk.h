@@ -176,6 +176,10 @@ void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const Pr
         bits = V8::le(entry, exit);
         if (bits) first_ref = node.child[std::countr_zero(bits)];
       }
+      if constexpr (Query::kNearFirst)
+        for (std::uint32_t b = bits; b != 0; b &= b - 1)
+          if (const std::uint32_t child = node.child[std::countr_zero(b)]; child & wide_ref::kLeafBit)
+            wide_ref::request_leaf(all_blocks, child);
       if (!Query::kNearFirst && bits != 0) {
         // Any order: no ordering and no distances (the stack entries are never pruned): the
         // first hit child next, the others on the stack.
