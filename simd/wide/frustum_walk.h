@@ -171,6 +171,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leav
             child_lanes &= valid & ~finished;
             if (child_lanes == 0) continue;
             wide_ref::request_leaf(bvh.blocks, child);
+          } else {
+            wide_ref::request_node(bvh.nodes, child);
           }
           int k = size++;
           for (; k > base && stack[k - 1].entry < dist[j]; --k) stack[k] = stack[k - 1];
