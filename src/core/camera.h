@@ -22,7 +22,8 @@ class Camera {
   /// Ray through the image-plane point of pixel coordinates (i, j): i in [0, nc-1] left to
   /// right, j in [0, nr-1] top to bottom; fractional values give sub-pixel (jittered)
   /// samples. p = (wl + i du, wt + j dv, f) in camera coordinates, r(l) = p + l (p - e),
-  /// tmin = 0, tmax = inf.
+  /// tmin = 0, tmax = inf. The direction p - e is [u v w] p, rounded once per product and
+  /// sum, whatever the eye's distance from the world's origin; the origin is that plus e.
   RayT<float> ray(float i, float j) const;
 
   /// Image-plane point of pixel (i, j) in world coordinates (the ray origin).
@@ -33,6 +34,9 @@ class Camera {
   const glm::vec3& eye() const { return e_; }
 
  private:
+  /// [u v w] (wl + i du, wt + j dv, f): the image-plane point relative to the eye.
+  glm::vec3 offset(float i, float j) const;
+
   glm::vec3 e_, u_, v_, w_;
   float f_, wl_, wt_, du_, dv_;
   int nc_, nr_;

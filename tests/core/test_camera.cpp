@@ -64,6 +64,25 @@ TEST_CASE("camera: look_at puts the image plane close to the eye at any scale") 
   }
 }
 
+TEST_CASE("camera: neighbouring pixels get their own directions with the eye far from the origin") {
+  // The conference room's camera: eye at x = 1610, image plane 1e-3 from it. Directions
+  // taken as p - e from the world-space point p rounded to one for whole blocks of pixels.
+  const glm::vec3 eye(1610, 356, -322);
+  const Camera cam = Camera::look_at(eye, {1609, 356, -322}, {0, 1, 0}, 60.0f, 512, 512);
+  const float half = 1e-3f * std::tan(glm::radians(30.0f));
+  const double step = 2.0 * half / 511.0;
+  for (int i : {0, 1, 255, 256, 510}) {
+    const auto a = cam.ray(float(i), 100.0f), b = cam.ray(float(i + 1), 100.0f);
+    CHECK(a.dir != b.dir);
+    // u = w x up = (-1, 0, 0) x (0, 1, 0) = (0, 0, -1): one pixel right is -step along z,
+    // to within a few ulps of the coordinates (about 1e-3), not of the eye's (1610).
+    CHECK(double(b.dir.z) - double(a.dir.z) == doctest::Approx(-step).epsilon(1e-3));
+    CHECK(a.dir.x == doctest::Approx(-1e-3f).epsilon(1e-6));
+    // The origin is the image-plane point, as pixel_point.
+    CHECK(a.org == cam.pixel_point(float(i), 100.0f));
+  }
+}
+
 TEST_CASE("camera: bad parameters are rejected with a message") {
   CHECK_THROWS_WITH(Camera::look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}, 45, 8, 8), doctest::Contains("coincide"));
   CHECK_THROWS_WITH(Camera::look_at({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, 45, 8, 8), doctest::Contains("parallel"));
