@@ -4,6 +4,7 @@
 
 #include <bit>
 #include <cmath>
+#include <string>
 #include <limits>
 #include <filesystem>
 #include <random>
@@ -203,8 +204,12 @@ TEST_CASE("render: each scene object is a geometry, and a hit on one shades with
     const auto b = static_cast<std::uint32_t>(3 * k);
     desc.mesh.indices.insert(desc.mesh.indices.end(), {b, b + 1, b + 2});
     desc.mesh.material.push_back(static_cast<std::uint32_t>(k));
-    desc.mesh.objects.push_back({"object " + std::to_string(k), static_cast<std::size_t>(k), 1});
-    desc.materials.push_back(io::Material{"m" + std::to_string(k)});
+    // (Appended, not "literal" + std::to_string: GCC 12 warns falsely on that form, -Wrestrict.)
+    std::string object = "object ", material = "m";
+    object += std::to_string(k);
+    material += std::to_string(k);
+    desc.mesh.objects.push_back({object, static_cast<std::size_t>(k), 1});
+    desc.materials.push_back(io::Material{material});
   }
   desc.materials.push_back(io::Material{"polygon"});
   desc.polygons.push_back({"square", {{5, 5, 0.5f}, {6, 5, 0.5f}, {6, 6, 0.5f}, {5, 6, 0.5f}}, 3});
