@@ -24,8 +24,10 @@ struct PacketKernels {
   /// Per-lane precomputation of Test for `rays` (the Woop shear for watertight).
   static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
   /// Closest hit of every active lane over blocks[0 .. count) (semantics as in
-  /// RayBlockKernels::intersect, per lane).
-  static void intersect(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits);
+  /// RayBlockKernels::intersect, per lane), the last block's first `last` triangles only
+  /// (a sparse last block: its padding untested).
+  static void intersect(const PreparedPacket<K>& rays, const Block* blocks, std::uint32_t count, HitPacket<K>& hits,
+                        int last = BW);
   /// Closest hit of every active lane against triangle j of `block` alone.
   static void intersect_triangle(const PreparedPacket<K>& rays, const Block& block, int j, HitPacket<K>& hits);
   /// The lanes of `active` (ANDed with rays.rays.active) that some triangle of
@@ -87,7 +89,7 @@ void PacketKernels<Arch, Test, K, BW>::prepare(const RayPacket<K>& rays, Prepare
 
 template <class Arch, TriangleTest Test, int K, int BW>
 void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepared, const Block* blocks,
-                                                 std::uint32_t count, HitPacket<K>& hits) {
+                                                 std::uint32_t count, HitPacket<K>& hits, int last) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
@@ -107,21 +109,24 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
     B hp = detail::load_ids<Arch>(hits.prim + c);
     M any_hit(false);
     // Triangles in block order, each broadcast to all lanes; hits only shrink upper.
-    for (std::uint32_t b = 0; b < count; ++b) {
-      const Block& block = blocks[b];
-      for (int j = 0; j < W; ++j) {
-        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-        if (xsimd::none(cand.valid)) continue;
-        const B t = detail::cand_t<T>(cand);
-        const M hit = detail::confirmed<T>(r, cand, t, upper);
-        upper = xsimd::select(hit, t, upper);
-        hu = xsimd::select(hit, cand.u, hu);
-        hv = xsimd::select(hit, cand.v, hv);
-        if constexpr (kScaled) hden = xsimd::select(hit, cand.den, hden);
-        hp = xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), hp);
-        any_hit = any_hit | hit;
-      }
-    }
+    const auto triangle = [&](const Block& block, int j) __attribute__((always_inline)) {
+      const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+      if (xsimd::none(cand.valid)) return;
+      const B t = detail::cand_t<T>(cand);
+      const M hit = detail::confirmed<T>(r, cand, t, upper);
+      upper = xsimd::select(hit, t, upper);
+      hu = xsimd::select(hit, cand.u, hu);
+      hv = xsimd::select(hit, cand.v, hv);
+      if constexpr (kScaled) hden = xsimd::select(hit, cand.den, hden);
+      hp = xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), hp);
+      any_hit = any_hit | hit;
+    };
+    // Whole blocks with a fixed trip count; a last block cut short at `last` after them.
+    const std::uint32_t whole = last < W ? count - 1 : count;
+    for (std::uint32_t b = 0; b < whole; ++b)
+      for (int j = 0; j < W; ++j) triangle(blocks[b], j);
+    if (whole != count)
+      for (int j = 0; j < last; ++j) triangle(blocks[whole], j);
     if (xsimd::none(any_hit)) continue;
     xsimd::select(any_hit, upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
     if constexpr (kScaled) {

@@ -82,8 +82,7 @@ int used_lanes(const Block& block) {
 
 /// The triangles of a leaf's last block when it is at most half full, else 0: the packet
 /// leaves leave that block's padding untested (a padding lane costs a full test in the
-/// block form). Closest hits test those triangles one by one after the blocks before it
-/// (count - 1 of them, or all when 0); occlusion stops the block kernel at the last one.
+/// block form): the block kernels stop at the last one (0: the whole block).
 template <class Kernels>
 int sparse_tail(const typename Kernels::Block* blocks, std::uint32_t count) {
   const int used = used_lanes<typename Kernels::SingleArch>(blocks[count - 1]);
@@ -278,15 +277,12 @@ struct ClosestHitPacket {
 
   B bound(int o, B tmax) const { return upper_bound<typename Kernels::Isa>(B::load_aligned(hits.t + o), tmax); }
 
-  /// The block kernels, a sparse last block triangle by triangle (sparse_tail). Same answers
-  /// and order as PacketKernels::intersect.
+  /// PacketKernels::intersect, a sparse last block's padding untested (sparse_tail).
   LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                  std::uint32_t lanes, B* tfar) {
     prep.rays.active = lanes;
     const int tail = sparse_tail<Kernels>(blocks, count);
-    const std::uint32_t whole = tail != 0 ? count - 1 : count;
-    if (whole != 0) Packet::intersect(prep, blocks, whole, hits);
-    for (int j = 0; j < tail; ++j) Packet::intersect_triangle(prep, blocks[whole], j, hits);
+    Packet::intersect(prep, blocks, count, hits, tail != 0 ? tail : Kernels::W);
     for (int c = 0; c < K / L; ++c) {
       const B ht = B::load_aligned(hits.t + c * L);
       tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);

@@ -52,7 +52,7 @@ template <class Arch, TriangleTest Test, int K>
 void packets(unsigned seed, int leaves, int packets_per_leaf) {
   constexpr int W = kLanes<Arch>;
   Generator g(seed);
-  Agreement closest, per_triangle, any;
+  Agreement closest, per_triangle, sparse, any;
   std::size_t uniform_axes = 0, mixed_axes = 0;
   const std::string where = name(Test) + " packet K=" + std::to_string(K);
   for (int leaf = 0; leaf < leaves; ++leaf) {
@@ -96,10 +96,14 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
       for (int i = 0; i < K; ++i)
         if (g.integer(0, 3) == 0) set_lane(start, i, Hit{g.uniform(0.0f, 5.0f), 0.25f, 0.5f, 77});
 
-      HitPacket<K> got = start, got_tri = start;
+      HitPacket<K> got = start, got_tri = start, got_last = start;
       volley::simd::PreparedPacket<K> prepared;
       PacketKernels<Arch, Test, K>::prepare(packet, prepared);
       PacketKernels<Arch, Test, K>::intersect(prepared, blocks.data(), nblocks, got);
+      // The last block cut short at `last` triangles (the walks' sparse leaf tails).
+      const int last = g.integer(1, W - 3);
+      const std::size_t last_end = static_cast<std::size_t>(W) * (nblocks - 1) + static_cast<std::size_t>(last);
+      PacketKernels<Arch, Test, K>::intersect(prepared, blocks.data(), nblocks, got_last, last);
       for (std::uint32_t b = 0; b < nblocks; ++b)
         for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(prepared, blocks[b], j, got_tri);
       const std::uint32_t ask = packet.active & static_cast<std::uint32_t>(g.integer(0, (1 << K) - 1) | 1);
@@ -111,6 +115,9 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
         const Hit want = active ? oracle_closest<Arch>(Test, ray, before, s, 0, s.size()) : before;
         closest.check(volley::simd::hit_of(got, i), want, ray, where + " x block, lane " + std::to_string(i));
         per_triangle.check(volley::simd::hit_of(got_tri, i), want, ray, where + " x triangle, lane " + std::to_string(i));
+        const Hit want_last = active ? oracle_closest<Arch>(Test, ray, before, s, 0, last_end) : before;
+        sparse.check(volley::simd::hit_of(got_last, i), want_last, ray,
+                     where + " x blocks to triangle " + std::to_string(last_end) + ", lane " + std::to_string(i));
         const bool want_occ = (ask >> i & 1) && oracle_occluded<Arch>(Test, ray, s, 0, s.size());
         any.check_bool(occ >> i & 1, want_occ, ray, where + " occluded, lane " + std::to_string(i));
       }
@@ -118,9 +125,11 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
   }
   INFO(closest.first);
   INFO(per_triangle.first);
+  INFO(sparse.first);
   INFO(any.first);
   CHECK(closest.mismatches == 0);
   CHECK(per_triangle.mismatches == 0);
+  CHECK(sparse.mismatches == 0);
   CHECK(any.mismatches == 0);
   CHECK(closest.hits > closest.compared / 10);
   CHECK(uniform_axes > 0);
