@@ -122,7 +122,7 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
       any_hit = any_hit | hit;
     };
     // Whole blocks with a fixed trip count; a last block cut short at `last` after them.
-    const std::uint32_t whole = last < W ? count - 1 : count;
+    const std::uint32_t whole = last < W && count != 0 ? count - 1 : count;
     for (std::uint32_t b = 0; b < whole; ++b)
       for (int j = 0; j < W; ++j) triangle(blocks[b], j);
     if (whole != count)
