@@ -68,6 +68,11 @@ constexpr std::uint32_t leaf(std::size_t first, std::uint32_t count) {
 constexpr std::uint32_t leaf_count(std::uint32_t ref) { return (ref >> kCountShift) & kCountMask; }
 /// The index of a leaf reference's first block.
 constexpr std::uint32_t leaf_first(std::uint32_t ref) { return ref & kFirstMask; }
+/// Requests the cache lines of [first, first + bytes) for reading.
+inline void request_lines(std::uintptr_t first, std::size_t bytes) {
+  for (std::size_t offset = 0; offset < bytes; offset += 64)
+    __builtin_prefetch(reinterpret_cast<const void*>(first + offset));
+}
 /// Requests the first block of leaf `ref` into the cache. The closest-hit walks and the
 /// frustum walk call it as soon as a node test finds the leaf entered, so that the misses
 /// of a node's entered leaves overlap instead of following one another (perf/rays.md,
@@ -75,16 +80,14 @@ constexpr std::uint32_t leaf_first(std::uint32_t ref) { return ref & kFirstMask;
 /// address is formed as an integer: an empty tree's blocks are a null pointer.
 template <class Leaves>
 inline void request_leaf(const Leaves* blocks, std::uint32_t ref) {
-  const std::uintptr_t first = reinterpret_cast<std::uintptr_t>(blocks) + sizeof(Leaves) * std::uintptr_t{leaf_first(ref)};
-  for (std::uintptr_t offset = 0; offset < sizeof(Leaves); offset += 64)
-    __builtin_prefetch(reinterpret_cast<const void*>(first + offset));
+  request_lines(reinterpret_cast<std::uintptr_t>(blocks) + sizeof(Leaves) * std::uintptr_t{leaf_first(ref)},
+                sizeof(Leaves));
 }
 /// Requests interior node `ref` (its boxes and references) into the cache: the frustum walk
 /// calls it for every child it pushes (perf/rays.md, session 21).
 template <int N>
 inline void request_node(const WideNode<N>* nodes, std::uint32_t ref) {
-  const char* node = reinterpret_cast<const char*>(&node_at(nodes, ref));
-  for (std::size_t offset = 0; offset < sizeof(WideNode<N>); offset += 64) __builtin_prefetch(node + offset);
+  request_lines(reinterpret_cast<std::uintptr_t>(nodes) + ref, sizeof(WideNode<N>));
 }
 }  // namespace wide_ref
 

@@ -80,13 +80,13 @@ int used_lanes(const Block& block) {
   return std::popcount(bits_from_mask<Arch>(used));
 }
 
-/// The triangles of a leaf's last block when it is at most half full, else 0: the packet
-/// leaves leave that block's padding untested (a padding lane costs a full test in the
-/// block form): the block kernels stop at the last one (0: the whole block).
+/// How many of a leaf's last block's triangles the packet leaves test: the used ones when
+/// the block is at most half full, else all W. A padding lane costs a full test in the
+/// packet form, so a sparse block stops at its last triangle (the block kernels' `last`).
 template <class Kernels>
-int sparse_tail(const typename Kernels::Block* blocks, std::uint32_t count) {
+int last_block_triangles(const typename Kernels::Block* blocks, std::uint32_t count) {
   const int used = used_lanes<typename Kernels::SingleArch>(blocks[count - 1]);
-  return used > Kernels::W / 2 ? 0 : used;
+  return used > Kernels::W / 2 ? Kernels::W : used;
 }
 
 /// Closest hit of one ray: every leaf lowers the bound to its nearest hit.
@@ -277,12 +277,11 @@ struct ClosestHitPacket {
 
   B bound(int o, B tmax) const { return upper_bound<typename Kernels::Isa>(B::load_aligned(hits.t + o), tmax); }
 
-  /// PacketKernels::intersect, a sparse last block's padding untested (sparse_tail).
+  /// PacketKernels::intersect, a sparse last block's padding untested (last_block_triangles).
   LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                  std::uint32_t lanes, B* tfar) {
     prep.rays.active = lanes;
-    const int tail = sparse_tail<Kernels>(blocks, count);
-    Packet::intersect(prep, blocks, count, hits, tail != 0 ? tail : Kernels::W);
+    Packet::intersect(prep, blocks, count, hits, last_block_triangles<Kernels>(blocks, count));
     for (int c = 0; c < K / L; ++c) {
       const B ht = B::load_aligned(hits.t + c * L);
       tfar[c] = xsimd::select(ht < tfar[c], ht, tfar[c]);
@@ -337,11 +336,11 @@ struct AnyHitPacket {
 
   B bound(int, B tmax) const { return tmax; }
 
-  /// PacketKernels::occluded, a sparse last block's padding untested (sparse_tail).
+  /// PacketKernels::occluded, a sparse last block's padding untested (last_block_triangles).
   LanesStep leaf(PreparedPacket<K>& prep, const typename Kernels::Block* blocks, std::uint32_t count,
                  std::uint32_t lanes, B* tfar) {
-    const int tail = sparse_tail<Kernels>(blocks, count);
-    const std::uint32_t now = Packet::occluded(prep, blocks, count, lanes, tail != 0 ? tail : Kernels::W);
+    const std::uint32_t now =
+        Packet::occluded(prep, blocks, count, lanes, last_block_triangles<Kernels>(blocks, count));
     if (now == 0) return {0, false};
     for (int c = 0; c < K / L; ++c)
       tfar[c] = xsimd::select(mask_from_bits<typename Kernels::Isa>((now >> (c * L)) & ((1u << L) - 1u)),
