@@ -107,7 +107,15 @@ struct WideView {
   const WideNode<kWideN>* nodes;  ///< 64-byte aligned
   const Block* blocks;            ///< triangle blocks: 64-byte aligned
   std::uint32_t root;             ///< root reference (wide_ref)
+  /// The tree outgrows the caches (kDeferHandoffBytes): the per-lane any-hit walk defers its
+  /// hand-offs to single rays and requests their subtrees first (packet_walk.h).
+  bool defer_handoffs = false;
 };
+
+/// Trees of at least this many bytes (nodes and blocks) defer the any-hit packet walk's
+/// hand-offs (WideView::defer_handoffs): the kitchen's 56 MB gained 19% on shadow packets,
+/// trees that fit the last-level cache (bunny, Sponza, 4-6 MB) lost 3% (perf/rays.md, session 22).
+inline constexpr std::size_t kDeferHandoffBytes = std::size_t{24} << 20;
 
 /// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,
 /// the root reference and build statistics. Immutable after build; thread-safe to read.

@@ -17,6 +17,10 @@ namespace volley::simd {
 // a subtree while its entry distance is within its current tmax (padded). Children are
 // visited nearest first by the heuristic "any lane enters it before the current best",
 // or, for a query with kNearFirst = false (any hit), in slot order as single rays.
+// Deferred hand-offs (a view that defers them and a query that allows it): a subtree left
+// to single rays is requested and listed, and the listed walks run after the packet's own,
+// each interior start's children requested first, so that the misses of a tree larger than
+// the caches overlap the packet's walk and one another instead of following one another.
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane. Fused: no lane has a zero direction component either,
 // and each slab distance is one fused operation (PacketLanes::fused_slabs).
@@ -54,6 +58,35 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   int size = 0;
   std::uint32_t finished = 0;
 
+  // Deferred hand-offs: (subtree, lane), at most kDeferred (more are walked at once).
+  constexpr int kDeferred = 32;
+  std::uint32_t defer_ref[kDeferred];
+  std::uint8_t defer_lane[kDeferred];
+  int deferred = 0;
+  const bool defer = detail::defer_singles<Query>() && bvh.defer_handoffs;
+  const auto walk_deferred = [&]() {
+    if (deferred == 0) return finished;
+    for (int k = 0; k < deferred; ++k) {
+      const std::uint32_t ref = defer_ref[k];
+      if (ref & wide_ref::kLeafBit) continue;
+      const WideNode<N>& node = wide_ref::node_at(bvh.nodes, ref);
+      for (int j = 0; j < N && node.child[j] != wide_ref::kEmptyRef; ++j) {
+        if (node.child[j] & wide_ref::kLeafBit)
+          wide_ref::request_leaf(bvh.blocks, node.child[j]);
+        else
+          wide_ref::request_node(bvh.nodes, node.child[j]);
+      }
+    }
+    alignas(64) float far_lanes[K];
+    for (int c = 0; c < C; ++c) tfar[c].store_aligned(far_lanes + c * L);
+    for (int k = 0; k < deferred; ++k) {
+      const int i = defer_lane[k];
+      if (!(finished & (1u << i)) && query.single(bvh, prep, setup, defer_ref[k], i, far_lanes[i]))
+        finished |= 1u << i;
+    }
+    return finished;
+  };
+
   std::uint32_t cur = bvh.root;
   B cur_dist[C];
   for (int c = 0; c < C; ++c)
@@ -69,6 +102,18 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
       bits |= detail::bits_from_mask<Arch>(act[c]) << (c * L);
     }
     bits &= ~finished;
+    if (defer && bits != 0 && std::popcount(bits) <= kPacketSwitchLanes &&
+        deferred + std::popcount(bits) <= kDeferred) {
+      if (cur & wide_ref::kLeafBit)
+        wide_ref::request_leaf(bvh.blocks, cur);
+      else
+        wide_ref::request_node(bvh.nodes, cur);
+      for (std::uint32_t b = bits; b != 0; b &= b - 1) {
+        defer_ref[deferred] = cur;
+        defer_lane[deferred++] = static_cast<std::uint8_t>(std::countr_zero(b));
+      }
+      bits = 0;
+    }
     if (bits != 0 && std::popcount(bits) <= kPacketSwitchLanes) {
       // Few lanes left: the rest of this subtree one ray at a time.
       alignas(64) float far_lanes[K];
@@ -190,7 +235,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
       }
     }
     // Pop the next subtree.
-    if (size == 0) return finished;
+    if (size == 0) return walk_deferred();
     --size;
     cur = stack_ref[size];
     for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[size] + c * L);

@@ -26,6 +26,9 @@
 //                   the subtree `start` for one lane of the prepared packet by the single
 //                   walk (few lanes left; Kernels::trace_lane); updates the lane's upper end
 //                   `far`, true when the lane is finished.
+//   P::kDeferSingles (optional, false if absent) the per-lane walk may run those single
+//                   walks after its own (where the view defers hand-offs): the answer does
+//                   not depend on when a lane's subtrees are searched (any hit).
 #pragma once
 #include <bit>
 #include <cstdint>
@@ -43,6 +46,15 @@ template <class Query>
 constexpr bool spread_frustum() {
   if constexpr (requires { Query::kSpreadFrustum; })
     return Query::kSpreadFrustum;
+  else
+    return false;
+}
+
+/// Whether the per-lane walk may defer the query's hand-offs to single rays (kDeferSingles).
+template <class Query>
+constexpr bool defer_singles() {
+  if constexpr (requires { Query::kDeferSingles; })
+    return Query::kDeferSingles;
   else
     return false;
 }
@@ -333,6 +345,7 @@ struct AnyHitPacket {
   using Packet = typename Kernels::LeafPacket;
   static constexpr int K = Kernels::K, L = Kernels::L;
   static constexpr bool kNearFirst = false;
+  static constexpr bool kDeferSingles = true;
 
   B bound(int, B tmax) const { return tmax; }
 

@@ -32,7 +32,7 @@ class WideAccelFor final : public WideAccel {
   void build(const core::Bvh& bvh, const float* xyz, const std::uint32_t* ids) override {
     stats_ = build_wide<Test, W>(bvh, xyz, ids, nodes_, blocks_, root_);
     adopted_ = {};
-    view_ = {nodes_.data(), blocks_.data(), root_};
+    set_view(nodes_.data(), nodes_.size(), blocks_.data(), blocks_.size());
   }
   void refit(const float* xyz, const std::uint32_t* index_of) override {
     if (adopted_.owner) {
@@ -42,10 +42,11 @@ class WideAccelFor final : public WideAccel {
       nodes_.assign(nodes, nodes + adopted_.node_count);
       blocks_.assign(blocks, blocks + adopted_.block_count);
       adopted_ = {};
-      view_ = {nodes_.data(), blocks_.data(), root_};
+      set_view(nodes_.data(), nodes_.size(), blocks_.data(), blocks_.size());
     }
     stats_ = refit_wide<Test, W>(xyz, index_of, nodes_, blocks_, stats_);
   }
+  void defer_handoffs(bool on) override { view_.defer_handoffs = on; }
   WideImage image() const override {
     const std::size_t node_count = adopted_.owner ? adopted_.node_count : nodes_.size();
     const std::size_t block_count = adopted_.owner ? adopted_.block_count : blocks_.size();
@@ -67,7 +68,7 @@ class WideAccelFor final : public WideAccel {
     blocks_.clear();
     root_ = image.root;
     stats_ = image.stats;
-    view_ = {nodes, blocks, root_};
+    set_view(nodes, image.node_count, blocks, image.block_count);
     adopted_ = std::move(image);
   }
   const simd::WideStats& stats() const override { return stats_; }
@@ -90,6 +91,13 @@ class WideAccelFor final : public WideAccel {
   void closest_point(core::PointQuery& query) const override { Kernels::closest_point(view_, query); }
 
  private:
+  /// The kernels' view of `node_count` nodes and `block_count` blocks (root_ set).
+  void set_view(const simd::WideNode<simd::kWideN>* nodes, std::size_t node_count, const Block* blocks,
+                std::size_t block_count) {
+    const std::size_t bytes = node_count * sizeof(simd::WideNode<simd::kWideN>) + block_count * sizeof(Block);
+    view_ = {nodes, blocks, root_, bytes >= simd::kDeferHandoffBytes};
+  }
+
   typename Kernels::View view_{nullptr, nullptr, simd::wide_ref::kEmptyRef};
   simd::AlignedVector<simd::WideNode<simd::kWideN>> nodes_;
   simd::AlignedVector<Block> blocks_;

@@ -201,6 +201,68 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   }
 }
 
+TEST_CASE("wide: occlusion packets with deferred hand-offs answer as brute force (every ISA and test)") {
+  // Trees past kDeferHandoffBytes walk the lanes left to single rays after the packet's own
+  // walk; a small soup with the deferral turned on takes that path on every packet that
+  // hands lanes off. Shadow-like packets: origins around a point of the soup, segments to
+  // one of a few lights, some of them past the soup (one octant, spread origins: the fused
+  // per-lane walk); then incoherent ones, partial masks and poisoned lanes.
+  const Soup soup = random_soup(3000, 41);
+  const auto boxes = soup.boxes();
+  const volley::core::Bvh bvh = volley::core::build_bvh(boxes, {});
+  std::vector<std::uint32_t> ids(soup.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<float> pos(-10.0f, 10.0f), near(-0.6f, 0.6f);
+  const glm::vec3 lights[3] = {{25.0f, 30.0f, 20.0f}, {-3.0f, 4.0f, 2.0f}, {-30.0f, 12.0f, -18.0f}};
+  std::vector<Ray> rays;
+  for (int packet = 0; packet < 240; ++packet) {
+    const glm::vec3 centre(pos(rng), pos(rng), pos(rng));
+    const glm::vec3 light = lights[packet % 3];
+    for (int i = 0; i < 16; ++i) {
+      const glm::vec3 o = centre + glm::vec3(near(rng), near(rng), near(rng));
+      rays.push_back(make_ray(o, light - o, 0.0f, 1.0f));
+    }
+  }
+  const std::vector<Ray> mixed = mixed_rays(70, 10.0f, 47);
+  rays.insert(rays.end(), mixed.begin(), mixed.end());
+  for (TriangleTest test : kTests)
+    for (Isa isa : simd_isas()) {
+      CAPTURE(std::string(volley::to_string(test)));
+      CAPTURE(std::string(volley::to_string(isa)));
+      const std::vector<Hit> want = brute_force_all(soup, test, rays, isa);
+      const auto blocked = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
+      CHECK(blocked > static_cast<long>(rays.size() / 10));
+      CHECK(blocked < static_cast<long>(rays.size() * 9 / 10));
+      const auto wide = volley::accel::WideAccel::create(test, isa);
+      wide->build(bvh, soup.xyz.data(), ids.data());
+      for (bool defer : {true, false}) {
+        CAPTURE(defer);
+        wide->defer_handoffs(defer);
+        std::size_t wrong = 0, wrong_partial = 0, wrong_poisoned = 0;
+        volley::RayPacket<16> p;
+        for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+          volley::load(p, rays.data() + first, 16);
+          const std::uint32_t all = wide->occluded(p);
+          p.active = 0xb5a6u;
+          const std::uint32_t partial = wide->occluded(p);
+          p.active = 0xffffu;
+          for (int i = 1; i < 16; i += 5) p.dz[i] = kNaN;
+          const std::uint32_t poisoned = wide->occluded(p);
+          for (int i = 0; i < 16; ++i) {
+            const bool hit = want[first + i].hit();
+            wrong += ((all >> i) & 1u) != (hit ? 1u : 0u);
+            wrong_partial += ((partial >> i) & 1u) != ((0xb5a6u >> i) & 1u && hit ? 1u : 0u);
+            wrong_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && hit ? 1u : 0u);
+          }
+        }
+        CHECK(wrong == 0);
+        CHECK(wrong_partial == 0);
+        CHECK(wrong_poisoned == 0);
+      }
+    }
+}
+
 TEST_CASE("wide: shared meshes against the scalar oracle's traversal") {
   const std::filesystem::path dir = VOLLEY_SHARED_SCENES;
   for (const char* name : {"teapot.obj", "stanford-bunny.obj"}) {
