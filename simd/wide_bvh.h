@@ -107,8 +107,9 @@ struct WideView {
   const WideNode<kWideN>* nodes;  ///< 64-byte aligned
   const Block* blocks;            ///< triangle blocks: 64-byte aligned
   std::uint32_t root;             ///< root reference (wide_ref)
-  /// The tree outgrows the caches (kDeferHandoffBytes): the per-lane any-hit walk defers its
-  /// hand-offs to single rays and requests their subtrees first (packet_walk.h).
+  /// The tree outgrows the caches (kDeferHandoffBytes): the per-lane any-hit walk of
+  /// one-octant packets defers its hand-offs to single rays and requests their subtrees
+  /// first (packet_walk.h).
   bool defer_handoffs = false;
 };
 

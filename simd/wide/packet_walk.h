@@ -17,10 +17,13 @@ namespace volley::simd {
 // a subtree while its entry distance is within its current tmax (padded). Children are
 // visited nearest first by the heuristic "any lane enters it before the current best",
 // or, for a query with kNearFirst = false (any hit), in slot order as single rays.
-// Deferred hand-offs (a view that defers them and a query that allows it): a subtree left
-// to single rays is requested and listed, and the listed walks run after the packet's own,
-// each interior start's children requested first, so that the misses of a tree larger than
-// the caches overlap the packet's walk and one another instead of following one another.
+// Deferred hand-offs (a view that defers them, a query that allows it, one octant): a
+// subtree left to single rays is requested and listed, and the listed walks run after the
+// packet's own, each interior start's children requested first, so that the misses of a
+// tree larger than the caches overlap the packet's walk and one another instead of
+// following one another. Packets of mixed octants (bounce and ambient-occlusion rays, most
+// of which are blocked) walk them at once: deferred, a lane that a hand-off would have
+// finished stays in the packet's walk (the kitchen's lost 24%; perf/rays.md, session 22).
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane. Fused: no lane has a zero direction component either,
 // and each slab distance is one fused operation (PacketLanes::fused_slabs).
@@ -63,7 +66,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   std::uint32_t defer_ref[kDeferred];
   std::uint8_t defer_lane[kDeferred];
   int deferred = 0;
-  const bool defer = detail::defer_singles<Query>() && bvh.defer_handoffs;
+  const bool defer = Uniform && detail::defer_singles<Query>() && bvh.defer_handoffs;
   const auto walk_deferred = [&]() {
     if (deferred == 0) return finished;
     for (int k = 0; k < deferred; ++k) {
