@@ -114,8 +114,9 @@ struct WideView {
 };
 
 /// Trees of at least this many bytes (nodes and blocks) defer the any-hit packet walk's
-/// hand-offs (WideView::defer_handoffs): the kitchen's 56 MB gained 19% on shadow packets,
-/// trees that fit the last-level cache (bunny, Sponza, 4-6 MB) lost 3% (perf/rays.md, session 22).
+/// hand-offs (WideView::defer_handoffs): past the last-level cache the hand-off walks wait
+/// on memory, which the deferral overlaps; on trees that fit, it only costs (perf/rays.md,
+/// session 22).
 inline constexpr std::size_t kDeferHandoffBytes = std::size_t{24} << 20;
 
 /// A built wide BVH over triangle blocks of type Block (BlockFor<Test, W>): nodes, blocks,

@@ -23,7 +23,8 @@ namespace volley::simd {
 // tree larger than the caches overlap the packet's walk and one another instead of
 // following one another. Packets of mixed octants (bounce and ambient-occlusion rays, most
 // of which are blocked) walk them at once: deferred, a lane that a hand-off would have
-// finished stays in the packet's walk (the kitchen's lost 24%; perf/rays.md, session 22).
+// finished stays in the packet's walk, which costs more than the misses (perf/rays.md,
+// session 22).
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane. Fused: no lane has a zero direction component either,
 // and each slab distance is one fused operation (PacketLanes::fused_slabs).

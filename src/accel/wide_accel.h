@@ -56,8 +56,8 @@ class WideAccel {
   /// vertices xyz[9 * index_of[id] ..]. Not thread-safe (no query may run).
   virtual void refit(const float* xyz, const std::uint32_t* index_of) = 0;
   /// Whether occlusion packets defer their hand-offs to single rays
-  /// (simd::WideView::defer_handoffs). Set at build, refit and adopt from the structure's
-  /// size (simd::kDeferHandoffBytes); the tests turn it on for small trees.
+  /// (simd::WideView::defer_handoffs). Set from the structure's size (simd::kDeferHandoffBytes)
+  /// whenever a structure is built or adopted; the tests turn it on for small trees.
   virtual void defer_handoffs(bool on) = 0;
   /// The built structure as memory (valid while this WideAccel lives and is not rebuilt).
   virtual WideImage image() const = 0;
