@@ -15,8 +15,8 @@ namespace volley::simd {
 /// Cache-line (and AVX-512 register) alignment of every SoA buffer.
 inline constexpr std::size_t kAlign = 64;
 
-/// std::allocator that returns kAlign-aligned memory; arrays of 4 MiB or more (triangle
-/// blocks, wide nodes) on huge pages (core::allocate_large).
+/// std::allocator that returns kAlign-aligned memory; arrays of core::kLargeAllocBytes or
+/// more (triangle blocks, wide nodes) on huge pages (core::allocate_large).
 template <class T>
 struct AlignedAllocator {
   using value_type = T;

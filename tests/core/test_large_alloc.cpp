@@ -1,4 +1,4 @@
-// core::allocate_large / LargeArray: the huge-page mapping path (4 MiB and up) and the
+// core::allocate_large / LargeArray: the huge-page mapping path (kLargeAllocBytes and up) and the
 // operator new path below it give aligned, writable storage, freed with the same size.
 #include <doctest/doctest.h>
 
