@@ -15,18 +15,25 @@ namespace volley::simd {
 /// Cache-line (and AVX-512 register) alignment of every SoA buffer.
 inline constexpr std::size_t kAlign = 64;
 
-/// std::allocator that returns kAlign-aligned memory; arrays of core::kLargeAllocBytes or
-/// more (triangle blocks, wide nodes) on huge pages (core::allocate_large).
+/// Whether arrays of T are read by every ray's walk (wide nodes, triangle blocks: the
+/// specialisations beside those types): such arrays go on huge pages from
+/// core::kWalkedAllocBytes, others from core::kLargeAllocBytes.
+template <class T>
+inline constexpr bool kWalkedByRays = false;
+
+/// std::allocator that returns kAlign-aligned memory; large arrays on huge pages
+/// (core::allocate_large; the threshold by kWalkedByRays).
 template <class T>
 struct AlignedAllocator {
   using value_type = T;
+  static constexpr std::size_t kHugeFrom = kWalkedByRays<T> ? core::kWalkedAllocBytes : core::kLargeAllocBytes;
   AlignedAllocator() noexcept = default;
   template <class U>
   AlignedAllocator(const AlignedAllocator<U>&) noexcept {}
   T* allocate(std::size_t n) {
-    return static_cast<T*>(core::allocate_large(n * sizeof(T), kAlign));
+    return static_cast<T*>(core::allocate_large(n * sizeof(T), kAlign, kHugeFrom));
   }
-  void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign); }
+  void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign, kHugeFrom); }
   /// resize() and the count constructor default-initialise: trivial elements (nodes, triangle
   /// blocks) are left to their writer, which fills them in parallel (a serial zero fill
   /// showed in build profiles: perf/build.md); types with a

@@ -6,6 +6,8 @@
 #pragma once
 #include <cstdint>
 
+#include "simd/aligned.h"
+
 namespace volley::simd {
 
 /// Möller–Trumbore block: first vertex, the two edges from it and their cross product,
@@ -48,6 +50,13 @@ struct alignas(64) WatertightBlock {
 };                         // 40 bytes per triangle (W = 4: 160 B padded to 192)
 static_assert(sizeof(WatertightBlock<4>) == 192 && sizeof(WatertightBlock<8>) == 320 &&
               sizeof(WatertightBlock<16>) == 640, "WatertightBlock: 40 B per triangle, 64 B aligned");
+
+template <int W>
+inline constexpr bool kWalkedByRays<MollerBlock<W>> = true;
+template <int W>
+inline constexpr bool kWalkedByRays<PlaneBlock<W>> = true;
+template <int W>
+inline constexpr bool kWalkedByRays<WatertightBlock<W>> = true;
 
 }  // namespace volley::simd
 

@@ -15,9 +15,9 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 std::size_t round_up(std::size_t bytes) { return (bytes + kHugePage - 1) & ~(kHugePage - 1); }
 }  // namespace
 
-void* allocate_large(std::size_t bytes, std::size_t align) {
+void* allocate_large(std::size_t bytes, std::size_t align, std::size_t huge_from) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-  if (bytes >= kLargeAllocBytes) {
+  if (bytes >= huge_from) {
     if (bytes > SIZE_MAX - 2 * kHugePage) throw std::bad_alloc();  // round_up would wrap
     const std::size_t size = round_up(bytes);
     // Map one huge page more than needed and unmap the misaligned head and the tail.
@@ -35,10 +35,10 @@ void* allocate_large(std::size_t bytes, std::size_t align) {
   return ::operator new(bytes, std::align_val_t(align));
 }
 
-void free_large(void* p, std::size_t bytes, std::size_t align) noexcept {
+void free_large(void* p, std::size_t bytes, std::size_t align, std::size_t huge_from) noexcept {
   if (p == nullptr) return;
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-  if (bytes >= kLargeAllocBytes) {
+  if (bytes >= huge_from) {
     munmap(p, round_up(bytes));
     return;
   }

@@ -11,18 +11,20 @@
 
 namespace volley::core {
 
-/// Arrays this large or larger are mapped in whole 2 MiB pages (1 MiB: the triangle blocks
-/// of meshes of 25k triangles and more, whose walks gained 2-3% on shadow and bounce rays
-/// against 4 KiB pages; perf/rays.md, session 22).
-inline constexpr std::size_t kLargeAllocBytes = std::size_t{1} << 20;
+/// Arrays this large or larger are mapped in whole 2 MiB pages.
+inline constexpr std::size_t kLargeAllocBytes = std::size_t{4} << 20;
+/// The same for the arrays every ray's walk reads (wide nodes, triangle blocks): their
+/// TLB reach pays from 1 MiB on, while the build's scratch arrays of that size are faster
+/// reused from the heap when a scene is rebuilt (perf/rays.md, session 22).
+inline constexpr std::size_t kWalkedAllocBytes = std::size_t{1} << 20;
 
 /// `bytes` of storage aligned to `align` (a power of two, at most 4096): operator new below
-/// kLargeAllocBytes; above, an anonymous mapping aligned to 2 MiB with MADV_HUGEPAGE (the
+/// `huge_from`; from there on, an anonymous mapping aligned to 2 MiB with MADV_HUGEPAGE (the
 /// kernel still decides; its pages come zeroed). Throws std::bad_alloc.
-void* allocate_large(std::size_t bytes, std::size_t align);
+void* allocate_large(std::size_t bytes, std::size_t align, std::size_t huge_from = kLargeAllocBytes);
 
-/// Frees storage from allocate_large, given the same bytes and align.
-void free_large(void* p, std::size_t bytes, std::size_t align) noexcept;
+/// Frees storage from allocate_large, given the same bytes, align and huge_from.
+void free_large(void* p, std::size_t bytes, std::size_t align, std::size_t huge_from = kLargeAllocBytes) noexcept;
 
 /// A fixed number of trivial T on allocate_large storage, left uninitialised (a build's
 /// scratch tables, written before they are read).

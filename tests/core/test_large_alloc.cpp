@@ -1,5 +1,6 @@
-// core::allocate_large / LargeArray: the huge-page mapping path (kLargeAllocBytes and up) and the
-// operator new path below it give aligned, writable storage, freed with the same size.
+// core::allocate_large / LargeArray: the huge-page mapping path (from its threshold on) and
+// the operator new path below it give aligned, writable storage, freed with the same size;
+// the arrays the walks read (wide nodes, triangle blocks) take the lower threshold.
 #include <doctest/doctest.h>
 
 #include <cstdint>
@@ -7,10 +8,14 @@
 #include <new>
 
 #include "core/large_alloc.h"
+#include "simd/aligned.h"
+#include "simd/triangle_blocks.h"
+#include "simd/wide_bvh.h"
 
 using volley::core::allocate_large;
 using volley::core::free_large;
 using volley::core::kLargeAllocBytes;
+using volley::core::kWalkedAllocBytes;
 using volley::core::LargeArray;
 
 TEST_CASE("allocate_large: small and large sizes are aligned, writable and freed") {
@@ -46,4 +51,24 @@ TEST_CASE("LargeArray: holds n elements, indexable end to end") {
   LargeArray<double> small(3);
   small[2] = 1.5;
   CHECK(small.get()[2] == 1.5);
+}
+
+TEST_CASE("allocate_large: the walked arrays' threshold maps from 1 MiB, and AlignedAllocator picks it by type") {
+  static_assert(kWalkedAllocBytes < kLargeAllocBytes);
+  static_assert(volley::simd::AlignedAllocator<volley::simd::WideNode<8>>::kHugeFrom == kWalkedAllocBytes);
+  static_assert(volley::simd::AlignedAllocator<volley::simd::WatertightBlock<8>>::kHugeFrom == kWalkedAllocBytes);
+  static_assert(volley::simd::AlignedAllocator<volley::simd::MollerBlock<16>>::kHugeFrom == kWalkedAllocBytes);
+  static_assert(volley::simd::AlignedAllocator<volley::simd::PlaneBlock<4>>::kHugeFrom == kWalkedAllocBytes);
+  static_assert(volley::simd::AlignedAllocator<float>::kHugeFrom == kLargeAllocBytes);
+  for (const std::size_t bytes : {kWalkedAllocBytes - 64, kWalkedAllocBytes, kWalkedAllocBytes + 4096}) {
+    CAPTURE(bytes);
+    auto* p = static_cast<unsigned char*>(allocate_large(bytes, 64, kWalkedAllocBytes));
+    REQUIRE(p != nullptr);
+    p[0] = 1, p[bytes - 1] = 2;
+    CHECK(reinterpret_cast<std::uintptr_t>(p) % 64 == 0);
+    if (bytes >= kWalkedAllocBytes) CHECK(reinterpret_cast<std::uintptr_t>(p) % (std::size_t{2} << 20) == 0);
+    free_large(p, bytes, 64, kWalkedAllocBytes);
+  }
+  volley::simd::AlignedVector<volley::simd::WideNode<8>> nodes(kWalkedAllocBytes / sizeof(volley::simd::WideNode<8>));
+  CHECK(reinterpret_cast<std::uintptr_t>(nodes.data()) % (std::size_t{2} << 20) == 0);
 }
