@@ -27,9 +27,9 @@ struct alignas(64) WideNode {
   std::uint32_t child[N];   //  4N bytes: child references (see WideRef)
 };                          // N = 8: 224 bytes, padded to 256 (4 cache lines); N = 4: 112 -> 128
 static_assert(sizeof(WideNode<8>) == 256, "WideNode<8>: 192 B boxes + 32 B refs + 32 B padding");
+static_assert(sizeof(WideNode<4>) == 128, "WideNode<4>: 96 B boxes + 16 B refs + 16 B padding");
 template <int N>
 inline constexpr bool kWalkedByRays<WideNode<N>> = true;
-static_assert(sizeof(WideNode<4>) == 128, "WideNode<4>: 96 B boxes + 16 B refs + 16 B padding");
 
 /// Child references, 32 bits:
 ///   interior: bit 31 clear, bits 0..30 = the node's byte offset in the node array (index
