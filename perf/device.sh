@@ -8,6 +8,10 @@
 #                                # Python package's nthreads, at 1, 2, 4, 8, 16 threads
 #   bash perf/device.sh smt      # there: the CPU topology, and the stream rows that scale
 #                                # least at 8 threads on 8 cores against 8 on 4 (siblings)
+#   bash perf/device.sh sixteen  # there: 1 and 16 threads alternating, PAIRS times, for
+#                                # batch and stream mode on every scene's diffuse and shadow
+#                                # rays (the one-thread rate of a shared host drifts, so the
+#                                # ratio is taken within pairs), then 2, 4 and 8 threads once
 #
 # What travels (about 55 MiB): the CLI and the Python extension built here, the Debian
 # libraries they load, Debian's python3.11 with its standard library and NumPy (the
@@ -58,13 +62,13 @@ ray_file() {
   echo "$f"
 }
 
-# Mrays/s of a batch trace of scene $1, workload $2 on CPUs $3 with $4 threads, best of $5
-# repetitions; further arguments go to `volley trace`.
+# Mrays/s of a trace (mode MODE, default batch) of scene $1, workload $2 on CPUs $3 with
+# $4 threads, best of $5 repetitions; further arguments go to `volley trace`.
 batch_rate() {
   local n=$1 w=$2 cpus=$3 threads=$4 reps=$5
   shift 5
   taskset -c "$cpus" build/device/volley trace "$(scene_of "$n")" --scenes "$scenes" --rays "$(ray_file "$n" "$w")" \
-    --mode batch --threads "$threads" --reps "$reps" "$@" | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p'
+    --mode "${MODE:-batch}" --threads "$threads" --reps "$reps" "$@" | sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p'
 }
 
 # Whether the logical CPUs are SMT siblings (the figures of `run` at 16 threads on a
@@ -124,9 +128,46 @@ run() {
     --workload diffuse --threads "$(echo "${THREADS:-1 2 4 8 16}" | tr ' ' ,)" --reps 5 --rounds 2 2>&1 | tee "$out/python_scaling.md"
 }
 
+# The speedup of 16 threads over one, from one and sixteen threads alternating: each row
+# prints every sample, the best over the best and the median of the paired ratios.
+sixteen() {
+  unpack
+  local all n w extra mode one many ratios
+  all=0-$(($(nproc) - 1))
+  {
+    lscpu | grep -E "^(Model name|CPU\(s\)|Thread|Core|Socket|L2|L3)"
+    echo
+    echo "| rays | mode | 1 thread (samples) | 16 threads (samples) | best / best | median of pairs | 2, 4, 8 threads |"
+    echo "|---|---|---|---|---|---|---|"
+    while read -r n w extra; do
+      for mode in batch stream; do
+        export MODE=$mode
+        one=() many=() ratios=()
+        for _ in $(seq "${PAIRS:-3}"); do
+          # shellcheck disable=SC2086  # $extra is a list of options
+          one+=("$(batch_rate "$n" "$w" "$all" 1 7 $extra)")
+          # shellcheck disable=SC2086
+          many+=("$(batch_rate "$n" "$w" "$all" "$(nproc)" 7 $extra)")
+          ratios+=("$(awk -v a="${one[-1]}" -v b="${many[-1]}" 'BEGIN { printf "%.2f", b / a }')")
+        done
+        # shellcheck disable=SC2086
+        echo "| $n $w | $mode | ${one[*]} | ${many[*]} | $(printf '%s\n' "${many[@]}" | sort -g | tail -1 | awk -v a="$(printf '%s\n' "${one[@]}" | sort -g | tail -1)" '{ printf "%.1fx", $1 / a }') | $(printf '%s\n' "${ratios[@]}" | sort -g | awk '{ v[NR] = $1 } END { printf "%.1fx", v[int((NR + 1) / 2)] }') | $(for t in 2 4 8; do batch_rate "$n" "$w" "$all" "$t" 5 $extra; done | paste -sd' ') |"
+      done
+    done <<< "kitchen diffuse
+kitchen shadow --occluded
+sponza diffuse
+sponza shadow --occluded
+conference diffuse
+conference shadow --occluded
+bunny diffuse
+bunny shadow --occluded"
+  } 2>&1 | tee "$out/sixteen.md"
+}
+
 case "${1:-}" in
   pack) pack ;;
   run) run ;;
   smt) smt ;;
-  *) echo "usage: bash perf/device.sh pack|run|smt (see the comments at its top)" >&2; exit 2 ;;
+  sixteen) sixteen ;;
+  *) echo "usage: bash perf/device.sh pack|run|smt|sixteen (see the comments at its top)" >&2; exit 2 ;;
 esac
