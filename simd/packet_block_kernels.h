@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "simd/kernel_forms.h"
+#include "simd/paired_lanes.h"
 
 namespace volley::simd {
 
@@ -198,6 +199,13 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
       else
         return 0;
     }();
+    if constexpr (detail::kPairedLanes<Arch, Test, BW>) {
+      // Few lanes: two triangles per register (paired_lanes.h).
+      if (r.uniform && std::popcount(act_bits) <= L / 2 && (count > 1 || last > 1)) {
+        result |= detail::occluded_pairs<Arch, BW>(r, upper, sure, act_bits, blocks, count, last) << c;
+        continue;
+      }
+    }
     // Any hit ends a lane; the chunk ends when every active lane has one. The last block
     // ends at its `last` triangle.
     for (std::uint32_t b = 0; b < count; ++b) {

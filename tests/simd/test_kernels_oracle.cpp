@@ -108,6 +108,7 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
         for (int j = 0; j < W; ++j) PacketKernels<Arch, Test, K>::intersect_triangle(prepared, blocks[b], j, got_tri);
       const std::uint32_t ask = packet.active & static_cast<std::uint32_t>(g.integer(0, (1 << K) - 1) | 1);
       const std::uint32_t occ = PacketKernels<Arch, Test, K>::occluded(prepared, blocks.data(), nblocks, ask);
+      const std::uint32_t occ_last = PacketKernels<Arch, Test, K>::occluded(prepared, blocks.data(), nblocks, ask, last);
       for (int i = 0; i < K; ++i) {
         const Ray ray = volley::simd::ray_of(packet, i);
         const bool active = packet.active >> i & 1;
@@ -120,6 +121,9 @@ void packets(unsigned seed, int leaves, int packets_per_leaf) {
                      where + " x blocks to triangle " + std::to_string(last_end) + ", lane " + std::to_string(i));
         const bool want_occ = (ask >> i & 1) && oracle_occluded<Arch>(Test, ray, s, 0, s.size());
         any.check_bool(occ >> i & 1, want_occ, ray, where + " occluded, lane " + std::to_string(i));
+        const bool want_occ_last = (ask >> i & 1) && oracle_occluded<Arch>(Test, ray, s, 0, last_end);
+        any.check_bool(occ_last >> i & 1, want_occ_last, ray,
+                       where + " occluded to triangle " + std::to_string(last_end) + ", lane " + std::to_string(i));
       }
     }
   }

@@ -1,0 +1,85 @@
+// Any hit of at most half a packet chunk's lanes, two triangles per register: the active
+// rays are gathered into lane pairs (lanes 2s and 2s + 1 both hold the s-th active ray),
+// and each register tests triangles j and j + 1 of a block, one in each lane of a pair.
+// Half as many triangle tests as the one-triangle-per-register form when a leaf is
+// reached by eight rays or fewer. Every lane runs the same operations on the same ray and
+// triangle as in that form, so the answers are the same bit for bit.
+// AVX-512 watertight test with one axis permutation for the packet (uniform) only.
+#pragma once
+#include <immintrin.h>
+
+#include <bit>
+#include <cstdint>
+#include <limits>
+
+#include "simd/watertight.h"
+
+namespace volley::simd::detail {
+
+/// Whether PacketKernels::occluded hands chunks of few lanes to occluded_pairs.
+template <class Arch, TriangleTest Test, int BW>
+inline constexpr bool kPairedLanes = kLanes<Arch> == 16 && Test == TriangleTest::watertight && BW % 2 == 0;
+
+/// The lanes of `act` (at most 8 of 16) that some triangle of blocks[0 .. count) occludes,
+/// the last block's first `last` triangles only. `upper` is tmax on the active lanes (-inf elsewhere) and
+/// `sure` the sure-hit factors of that upper end, as PacketKernels::occluded holds them.
+template <class Arch, int BW>
+std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, FloatB<Arch> upper,
+                             const typename WatertightTest<Arch>::SureRange& sure, std::uint32_t act,
+                             const WatertightBlock<BW>* blocks, std::uint32_t count, int last) {
+  using T = WatertightTest<Arch>;
+  using B = FloatB<Arch>;
+  using M = MaskB<Arch>;
+  const int n = std::popcount(act);
+  // Lanes 2s and 2s + 1: the s-th active ray (lanes past 2n hold a copy of the first and
+  // an upper end of -inf, which fails every test).
+  const __m512i rank = _mm512_maskz_compress_epi32(static_cast<__mmask16>(act),
+                                                   _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
+  const __m512i from =
+      _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
+  const auto pick = [from](B v) { return B(_mm512_permutexvar_ps(from, v)); };
+  typename T::Rays p = r;
+  p.okx = pick(r.okx), p.oky = pick(r.oky), p.okz = pick(r.okz);
+  p.sx = pick(r.sx), p.sy = pick(r.sy), p.sz = pick(r.sz);
+  p.tmin = pick(r.tmin), p.tmin_lo = pick(r.tmin_lo);
+  const std::uint32_t live = (1u << (2 * n)) - 1u;
+  const B up = xsimd::select(mask_from_bits<Arch>(live), pick(upper), B(-std::numeric_limits<float>::infinity()));
+  const typename T::SureRange s{pick(sure.lo), pick(sure.hi)};
+  // Triangles j and j + 1 (j even) in the two lanes of every pair: a 64-bit load broadcast.
+  const auto pair = [&p](const WatertightBlock<BW>& b, int j) {
+    const auto at = [&b, j](int k, int axis) {
+      const __m128i two = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&b.p[k][axis][j]));
+      return B(_mm512_broadcast_f32x2(_mm_castsi128_ps(two)));
+    };
+    return typename T::Tris{at(0, p.kx) - p.okx, at(0, p.ky) - p.oky, at(0, p.kz) - p.okz,
+                            at(1, p.kx) - p.okx, at(1, p.ky) - p.oky, at(1, p.kz) - p.okz,
+                            at(2, p.kx) - p.okx, at(2, p.ky) - p.oky, at(2, p.kz) - p.okz};
+  };
+  // Bit 2s: either lane of pair s.
+  const auto either = [](std::uint32_t h) { return (h | (h >> 1)) & 0x5555u; };
+  const std::uint32_t rays_mask = live & 0x5555u;
+  M hit(false);
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const WatertightBlock<BW>& block = blocks[b];
+    const int used = b + 1 == count ? last : BW;
+    for (int j = 0; j < used; j += 2) {
+      // The steps of PacketKernels::occluded's watertight form, on the pairs.
+      const auto d = T::template depth<false>(p, pair(block, j));
+      M cand = T::prefilter(p, d, up) & ~hit;
+      if (j + 1 == used) cand = cand & mask_from_bits<Arch>(0x5555u);  // no triangle j + 1
+      if (xsimd::none(cand)) continue;
+      const M now = T::sure_hit(d, s) & cand;
+      hit = hit | now;
+      const M rest = cand & ~now;
+      if (xsimd::any(rest)) hit = hit | T::confirm(p, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, up);
+    }
+    if (either(bits_from_mask<Arch>(hit)) == rays_mask) break;
+  }
+  // A ray is occluded when either lane of its pair is: bit 2s of the pairs to bit s, then
+  // to the ray's own lane.
+  const __m512i pairs = _mm512_movm_epi32(static_cast<__mmask16>(either(bits_from_mask<Arch>(hit))));
+  const __m512i per_ray = _mm512_maskz_compress_epi32(0x5555, pairs);
+  return _mm512_movepi32_mask(_mm512_maskz_expand_epi32(static_cast<__mmask16>(act), per_ray)) & act;
+}
+
+}  // namespace volley::simd::detail
