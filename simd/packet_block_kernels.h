@@ -5,6 +5,7 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "simd/kernel_forms.h"
 #include "simd/paired_lanes.h"
@@ -207,25 +208,42 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
       }
     }
     // Any hit ends a lane; the chunk ends when every active lane has one. The last block
-    // ends at its `last` triangle.
-    for (std::uint32_t b = 0; b < count; ++b) {
-      const Block& block = blocks[b];
-      const int used = b + 1 == count ? last : W;
-      for (int j = 0; j < used; ++j) {
-        if constexpr (T::kDecision == detail::Decision::quotient) {
-          const auto d = T::template depth<false>(r, T::broadcast_tri(block, j, r));
-          const M cand = T::prefilter(r, d, upper) & ~hit;
-          if (xsimd::none(cand)) continue;
-          const M now = T::sure_hit(d, sure) & cand;
-          hit = hit | now;
-          const M rest = cand & ~now;
-          if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
-        } else {
-          const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-          if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t<T>(cand), upper);
+    // ends at its `last` triangle. Uniform: one axis permutation for the packet, known for
+    // the whole loop (whose registers then hold no per-lane permutation).
+    const auto triangles = [&](auto uniform) __attribute__((always_inline)) {
+      for (std::uint32_t b = 0; b < count; ++b) {
+        const Block& block = blocks[b];
+        const int used = b + 1 == count ? last : W;
+        for (int j = 0; j < used; ++j) {
+          if constexpr (T::kDecision == detail::Decision::quotient) {
+            const auto tri = [&] {
+              if constexpr (decltype(uniform)::value)
+                return T::broadcast_uniform(block, j, r);
+              else
+                return T::broadcast_tri(block, j, r);
+            }();
+            const auto d = T::template depth<false>(r, tri);
+            const M cand = T::prefilter(r, d, upper) & ~hit;
+            if (xsimd::none(cand)) continue;
+            const M now = T::sure_hit(d, sure) & cand;
+            hit = hit | now;
+            const M rest = cand & ~now;
+            if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
+          } else {
+            const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+            if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t<T>(cand), upper);
+          }
         }
+        if (xsimd::all(hit | ~act)) break;
       }
-      if (xsimd::all(hit | ~act)) break;
+    };
+    if constexpr (T::kDecision == detail::Decision::quotient) {
+      if (r.uniform)
+        triangles(std::true_type{});
+      else
+        triangles(std::false_type{});
+    } else {
+      triangles(std::false_type{});
     }
     result |= detail::bits_from_mask<Arch>(hit & act) << c;
   }

@@ -96,6 +96,9 @@ struct WatertightTest {
   /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
   template <int BW>
   [[gnu::always_inline]] inline static Tris broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r);
+  /// broadcast_tri() for rays known to be uniform.
+  template <int BW>
+  [[gnu::always_inline]] inline static Tris broadcast_uniform(const WatertightBlock<BW>& b, int j, const Rays& r);
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   /// EarlyExit: return as soon as no lane passes the edge and det tests (RayBlockKernels::intersect_inline).

@@ -138,13 +138,17 @@ auto WatertightTest<Arch, Crossing>::load_block(const Block& b, const Rays& r) -
 
 template <class Arch, bool Crossing>
 template <int BW>
+auto WatertightTest<Arch, Crossing>::broadcast_uniform(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
+  const int kx = r.kx, ky = r.ky, kz = r.kz;
+  return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,
+          B(b.p[1][kx][j]) - r.okx, B(b.p[1][ky][j]) - r.oky, B(b.p[1][kz][j]) - r.okz,
+          B(b.p[2][kx][j]) - r.okx, B(b.p[2][ky][j]) - r.oky, B(b.p[2][kz][j]) - r.okz};
+}
+
+template <class Arch, bool Crossing>
+template <int BW>
 auto WatertightTest<Arch, Crossing>::broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
-  if (r.uniform) {
-    const int kx = r.kx, ky = r.ky, kz = r.kz;
-    return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,
-            B(b.p[1][kx][j]) - r.okx, B(b.p[1][ky][j]) - r.oky, B(b.p[1][kz][j]) - r.okz,
-            B(b.p[2][kx][j]) - r.okx, B(b.p[2][ky][j]) - r.oky, B(b.p[2][kz][j]) - r.okz};
-  }
+  if (r.uniform) return broadcast_uniform(b, j, r);
   if constexpr (kLanes<Arch> >= 8) {
     // Per-lane permutation, AVX2 and AVX-512: the vertex's x y z in one register, each lane
     // picking its axis with one permute, minus the origin permuted once per packet (the same
