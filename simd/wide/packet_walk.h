@@ -57,7 +57,11 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
     negz[c] = lanes.iz[c] < B(0.0f);
   }
 
-  alignas(64) float stack_dist[detail::kWideStack][K];
+  // Any hit: a lane's upper end only falls when the lane finishes, so whether it is active
+  // in a stacked subtree is decided at the push (its entry bits), not re-tested at the pop.
+  constexpr bool kBits = !Query::kNearFirst;
+  alignas(64) float stack_dist[kBits ? 1 : detail::kWideStack][K];
+  std::uint32_t stack_bits[kBits ? detail::kWideStack : 1];
   std::uint32_t stack_ref[detail::kWideStack];
   int size = 0;
   std::uint32_t finished = 0;
@@ -93,19 +97,26 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
 
   std::uint32_t cur = bvh.root;
   B cur_dist[C];
-  for (int c = 0; c < C; ++c)
-    cur_dist[c] =
-        xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), lanes.tmin[c], B(kNaN));
+  std::uint32_t cur_bits = valid;
+  if constexpr (!kBits)
+    for (int c = 0; c < C; ++c)
+      cur_dist[c] =
+          xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), lanes.tmin[c], B(kNaN));
 
   for (;;) {
     // Lanes active in `cur`: entry within the current upper end (NaN: not entered).
     M act[C];
     std::uint32_t bits = 0;
-    for (int c = 0; c < C; ++c) {
-      act[c] = cur_dist[c] <= tfar[c] * pad;
-      bits |= detail::bits_from_mask<Arch>(act[c]) << (c * L);
+    if constexpr (kBits) {
+      bits = cur_bits & ~finished;
+      for (int c = 0; c < C; ++c) act[c] = detail::mask_from_bits<Arch>((bits >> (c * L)) & kChunkBits);
+    } else {
+      for (int c = 0; c < C; ++c) {
+        act[c] = cur_dist[c] <= tfar[c] * pad;
+        bits |= detail::bits_from_mask<Arch>(act[c]) << (c * L);
+      }
+      bits &= ~finished;
     }
-    bits &= ~finished;
     if (defer && bits != 0 && std::popcount(bits) <= kPacketSwitchLanes &&
         deferred + std::popcount(bits) <= kDeferred) {
       if (cur & wide_ref::kLeafBit)
@@ -136,8 +147,9 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
         const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
         // Child j's entry distance per lane (NaN where a lane does not enter it); whether
         // some lane enters it.
-        const auto enter = [&](int j, B* dist) {
+        const auto enter = [&](int j, B* dist, std::uint32_t& entered) {
           bool any = false;
+          entered = 0;
           for (int c = 0; c < C; ++c) {
             if (!xsimd::any(act[c])) {
               dist[c] = B(kNaN);
@@ -163,6 +175,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             }
             const M hit = act[c] & (entry <= exit);
             dist[c] = xsimd::select(hit, entry, B(kNaN));
+            if constexpr (kBits) entered |= detail::bits_from_mask<Arch>(hit) << (c * L);
             any |= xsimd::any(hit);
           }
           return any;
@@ -177,17 +190,18 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             const std::uint32_t child = node.child[j];
             if (child == wide_ref::kEmptyRef) break;  // used children come first
             B dist[C];
-            const bool any = enter(j, dist);
+            std::uint32_t entered;
+            const bool any = enter(j, dist, entered);
             stack_ref[size] = child;
-            for (int c = 0; c < C; ++c) dist[c].store_aligned(stack_dist[size] + c * L);
+            stack_bits[size] = entered;
             size += any ? 1 : 0;
           }
           if (size != base) {
             --size;
             cur = stack_ref[base];
-            for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[base] + c * L);
+            cur_bits = stack_bits[base];
             stack_ref[base] = stack_ref[size];
-            for (int c = 0; c < C; ++c) B::load_aligned(stack_dist[size] + c * L).store_aligned(stack_dist[base] + c * L);
+            stack_bits[base] = stack_bits[size];
             continue;
           }
         } else {
@@ -200,7 +214,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
             const std::uint32_t child = node.child[j];
             if (child == wide_ref::kEmptyRef) break;  // used children come first
             B dist[C];
-            if (!enter(j, dist)) continue;
+            std::uint32_t entered;
+            if (!enter(j, dist, entered)) continue;
             if (child & wide_ref::kLeafBit) wide_ref::request_leaf(bvh.blocks, child);
             if (next == wide_ref::kEmptyRef) {
               next = child;
@@ -242,7 +257,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
     if (size == 0) return walk_deferred();
     --size;
     cur = stack_ref[size];
-    for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[size] + c * L);
+    if constexpr (kBits)
+      cur_bits = stack_bits[size];
+    else
+      for (int c = 0; c < C; ++c) cur_dist[c] = B::load_aligned(stack_dist[size] + c * L);
   }
 }
 
