@@ -16,7 +16,8 @@ namespace volley::simd {
 // distance per lane), NaN for lanes that did not hit the subtree's box; a lane is active in
 // a subtree while its entry distance is within its current tmax (padded). Children are
 // visited nearest first by the heuristic "any lane enters it before the current best",
-// or, for a query with kNearFirst = false (any hit), in slot order as single rays.
+// or, for a query with kNearFirst = false (any hit), in slot order as single rays; such a
+// query's stack holds each subtree's entering lanes as bits instead of distances.
 // Deferred hand-offs (a view that defers them, a query that allows it, one octant): a
 // subtree left to single rays is requested and listed, and the listed walks run after the
 // packet's own, each interior start's children requested first, so that the misses of a
@@ -104,7 +105,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           xsimd::select(detail::mask_from_bits<Arch>((valid >> (c * L)) & kChunkBits), lanes.tmin[c], B(kNaN));
 
   for (;;) {
-    // Lanes active in `cur`: entry within the current upper end (NaN: not entered).
+    // Lanes active in `cur`: entry within the current upper end (NaN: not entered), or the
+    // entering lanes less the finished ones (kBits).
     M act[C];
     std::uint32_t bits = 0;
     if constexpr (kBits) {
