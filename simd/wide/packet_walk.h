@@ -176,6 +176,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
               exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
             }
             const M hit = act[c] & (entry <= exit);
+            // (Computed under kBits too, though unread: without it GCC leaves the any-hit
+            // push loop rolled, 13-16% slower; perf/rays.md, session 23.)
             dist[c] = xsimd::select(hit, entry, B(kNaN));
             if constexpr (kBits) entered |= detail::bits_from_mask<Arch>(hit) << (c * L);
             any |= xsimd::any(hit);
