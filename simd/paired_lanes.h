@@ -51,9 +51,9 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
       const __m128i two = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&b.p[k][axis][j]));
       return B(_mm512_broadcast_f32x2(_mm_castsi128_ps(two)));
     };
-    return typename T::Tris{at(0, p.kx) - p.okx, at(0, p.ky) - p.oky, at(0, p.kz) - p.okz,
-                            at(1, p.kx) - p.okx, at(1, p.ky) - p.oky, at(1, p.kz) - p.okz,
-                            at(2, p.kx) - p.okx, at(2, p.ky) - p.oky, at(2, p.kz) - p.okz};
+    return typename T::Tris{p.okx - at(0, p.kx), p.oky - at(0, p.ky), p.okz - at(0, p.kz),
+                            p.okx - at(1, p.kx), p.oky - at(1, p.ky), p.okz - at(1, p.kz),
+                            p.okx - at(2, p.kx), p.oky - at(2, p.ky), p.okz - at(2, p.kz)};
   };
   // Bit 2s: either lane of pair s.
   const auto either = [](std::uint32_t h) { return (h | (h >> 1)) & 0x5555u; };

@@ -64,13 +64,19 @@ struct WatertightTest {
     B tmin_lo;     // lower end of the prefilter, tmin - |tmin| core::kScaledPad<float> (then times
                    // |det|); NaN where |sz| > 0 fails: an infinite dir[kz] (sz = 0)
                    // or a NaN one never hits
-    B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
+    B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], and -1/dir[kz] (negated: Tris)
     bool uniform;
     int kx, ky, kz;
     M x0, x1, y0, y1, z0, z1;
   };
-  /// Triangle lanes: the vertices relative to the ray origin, permuted: a = p0 - org
-  /// taken along axes kx, ky, kz; likewise b (p1) and c (p2).
+  /// Triangle lanes: the vertices relative to the ray origin, negated and permuted:
+  /// a = org - p0 taken along axes kx, ky, kz; likewise b (p1) and c (p2).
+  /// Negated because AVX-512 subtracts a vertex broadcast from memory in one instruction
+  /// only as the second operand (vertex minus origin needs a broadcast of its own: nine
+  /// instructions more per packet triangle test). The oracle's values follow bit for bit:
+  /// the sheared coordinates come out exactly negated (rounding is symmetric), the edge
+  /// functions are products of two of them, and the depth sum multiplies the negated z
+  /// by the negated scale sz.
   struct Tris {
     B akx, aky, akz, bkx, bky, bkz, ckx, cky, ckz;
   };
@@ -286,7 +292,8 @@ auto WatertightTest<Arch, Crossing>::fallback(B ax, B ay, B bx, B by, B cx, B cy
     const double dv = double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]);
     const double dw = double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]);
     feu[i] = float(du), fev[i] = float(dv), few[i] = float(dw);
-    if (crossing_in && core::crossing_inside(du, dv, dw, fax[i], fay[i], fbx[i], fby[i], fcx[i], fcy[i]))
+    // (The sheared coordinates are negated, as Tris are; the rule reads them as they are.)
+    if (crossing_in && core::crossing_inside(du, dv, dw, -fax[i], -fay[i], -fbx[i], -fby[i], -fcx[i], -fcy[i]))
       *crossing_in |= 1u << i;
   }
   return {B::load_aligned(feu), B::load_aligned(fev), B::load_aligned(few)};
