@@ -10,6 +10,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "simd/watertight.h"
@@ -45,11 +46,14 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
   const std::uint32_t live = (1u << (2 * n)) - 1u;
   const B up = xsimd::select(mask_from_bits<Arch>(live), pick(upper), B(-std::numeric_limits<float>::infinity()));
   const typename T::SureRange s{pick(sure.lo), pick(sure.hi)};
-  // Triangles j and j + 1 (j even) in the two lanes of every pair: a 64-bit load broadcast.
+  // Triangles j and j + 1 (j even) in the two lanes of every pair: the two floats
+  // broadcast as one double, which is a plain load (a float pair broadcast takes a
+  // shuffle more).
   const auto pair = [&p](const WatertightBlock<BW>& b, int j) {
     const auto at = [&b, j](int k, int axis) {
-      const __m128i two = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&b.p[k][axis][j]));
-      return B(_mm512_broadcast_f32x2(_mm_castsi128_ps(two)));
+      double two;
+      std::memcpy(&two, &b.p[k][axis][j], sizeof two);
+      return B(_mm512_castpd_ps(_mm512_set1_pd(two)));
     };
     return typename T::Tris{p.okx - at(0, p.kx), p.oky - at(0, p.ky), p.okz - at(0, p.kz),
                             p.okx - at(1, p.kx), p.oky - at(1, p.ky), p.okz - at(1, p.kz),
