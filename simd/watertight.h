@@ -1,6 +1,7 @@
 // Watertight ray/triangle test (Woop, Benthin & Wald 2013, "Watertight Ray/Triangle
 // Intersection", JCGT 2(1)) on float lanes. The SIMD twin of
-// src/core/triangle_watertight.h: the same float operations in the same order, so every
+// src/core/triangle_watertight.h: the same float operations in the same order (on the
+// vertices relative to the origin negated, which gives the same values: Tris), so every
 // lane gives the hit/miss and t, u, v of the oracle's variant for its ISA bit for bit
 // (core::watertight_fused_for: the shear and the depth sum fuse where the ISA has FMA).
 //
@@ -292,7 +293,7 @@ auto WatertightTest<Arch, Crossing>::fallback(B ax, B ay, B bx, B by, B cx, B cy
     const double dv = double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]);
     const double dw = double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]);
     feu[i] = float(du), fev[i] = float(dv), few[i] = float(dw);
-    // (The sheared coordinates are negated, as Tris are; the rule reads them as they are.)
+    // (The sheared coordinates here are negated, as Tris are; the rule takes the oracle's.)
     if (crossing_in && core::crossing_inside(du, dv, dw, -fax[i], -fay[i], -fbx[i], -fby[i], -fcx[i], -fcy[i]))
       *crossing_in |= 1u << i;
   }
