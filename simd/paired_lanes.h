@@ -41,14 +41,14 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
   const auto pick = [from](B v) { return B(_mm512_permutexvar_ps(from, v)); };
   typename T::Rays p = r;
   p.okx = pick(r.okx), p.oky = pick(r.oky), p.okz = pick(r.okz);
-  p.sx = pick(r.sx), p.sy = pick(r.sy), p.sz = pick(r.sz);
+  p.sx = pick(r.sx), p.sy = pick(r.sy), p.sz = -pick(r.sz);  // negated: the pairs below
   p.tmin = pick(r.tmin), p.tmin_lo = pick(r.tmin_lo);
   const std::uint32_t live = (1u << (2 * n)) - 1u;
   const B up = xsimd::select(mask_from_bits<Arch>(live), pick(upper), B(-std::numeric_limits<float>::infinity()));
   const typename T::SureRange s{pick(sure.lo), pick(sure.hi)};
   // Triangles j and j + 1 (j even) in the two lanes of every pair: the two floats
   // broadcast as one double, which is a plain load (a float pair broadcast takes a
-  // shuffle more).
+  // shuffle more), origin minus vertex as WatertightTest::broadcast_negated.
   const auto pair = [&p](const WatertightBlock<BW>& b, int j) {
     const auto at = [&b, j](int k, int axis) {
       double two;

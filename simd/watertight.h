@@ -1,7 +1,6 @@
 // Watertight ray/triangle test (Woop, Benthin & Wald 2013, "Watertight Ray/Triangle
 // Intersection", JCGT 2(1)) on float lanes. The SIMD twin of
-// src/core/triangle_watertight.h: the same float operations in the same order (on the
-// vertices relative to the origin negated, which gives the same values: Tris), so every
+// src/core/triangle_watertight.h: the same float operations in the same order, so every
 // lane gives the hit/miss and t, u, v of the oracle's variant for its ISA bit for bit
 // (core::watertight_fused_for: the shear and the depth sum fuse where the ISA has FMA).
 //
@@ -65,19 +64,13 @@ struct WatertightTest {
     B tmin_lo;     // lower end of the prefilter, tmin - |tmin| core::kScaledPad<float> (then times
                    // |det|); NaN where |sz| > 0 fails: an infinite dir[kz] (sz = 0)
                    // or a NaN one never hits
-    B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], and -1/dir[kz] (negated: Tris)
+    B sx, sy, sz;  // shear dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz]
     bool uniform;
     int kx, ky, kz;
     M x0, x1, y0, y1, z0, z1;
   };
-  /// Triangle lanes: the vertices relative to the ray origin, negated and permuted:
-  /// a = org - p0 taken along axes kx, ky, kz; likewise b (p1) and c (p2).
-  /// Negated because AVX-512 subtracts a vertex broadcast from memory in one instruction
-  /// only as the second operand (vertex minus origin needs a broadcast of its own: nine
-  /// instructions more per packet triangle test). The oracle's values follow bit for bit:
-  /// the sheared coordinates come out exactly negated (rounding is symmetric), the edge
-  /// functions are products of two of them, and the depth sum multiplies the negated z
-  /// by the negated scale sz.
+  /// Triangle lanes: the vertices relative to the ray origin, permuted: a = p0 - org
+  /// taken along axes kx, ky, kz; likewise b (p1) and c (p2).
   struct Tris {
     B akx, aky, akz, bkx, bky, bkz, ckx, cky, ckz;
   };
@@ -106,6 +99,28 @@ struct WatertightTest {
   /// broadcast_tri() for rays known to be uniform.
   template <int BW>
   [[gnu::always_inline]] inline static Tris broadcast_uniform(const WatertightBlock<BW>& b, int j, const Rays& r);
+
+  /// The any-hit forms' triangle lanes: broadcast_uniform() negated, origin minus vertex,
+  /// for rays from negated() (the z scale negated too). AVX-512 folds a broadcast from
+  /// memory into an instruction only as its second operand, so this is one instruction
+  /// per coordinate where vertex minus origin takes two (perf/rays.md, session 24).
+  /// Every decision is the same bit for bit: each nonzero value of the test is the
+  /// original's, negated or not (rounding is symmetric; the edge functions and the
+  /// depth terms are products of two negated factors), and an exact zero may differ
+  /// only in its sign, which no comparison sees. A reported t, u or v could show such a
+  /// zero's sign, so the closest-hit and crossing forms keep broadcast_uniform().
+  template <int BW>
+  [[gnu::always_inline]] inline static Tris broadcast_negated(const WatertightBlock<BW>& b, int j, const Rays& r) {
+    const int kx = r.kx, ky = r.ky, kz = r.kz;
+    return {r.okx - B(b.p[0][kx][j]), r.oky - B(b.p[0][ky][j]), r.okz - B(b.p[0][kz][j]),
+            r.okx - B(b.p[1][kx][j]), r.oky - B(b.p[1][ky][j]), r.okz - B(b.p[1][kz][j]),
+            r.okx - B(b.p[2][kx][j]), r.oky - B(b.p[2][ky][j]), r.okz - B(b.p[2][kz][j])};
+  }
+  /// The rays for broadcast_negated(): the z scale negated.
+  [[gnu::always_inline]] inline static Rays negated(Rays r) {
+    r.sz = -r.sz;
+    return r;
+  }
   /// The per-lane steps are always inlined into the kernel forms (one block or one triangle
   /// per call, so call overhead and batches passed through memory would dominate).
   /// EarlyExit: return as soon as no lane passes the edge and det tests (RayBlockKernels::intersect_inline).
@@ -293,8 +308,7 @@ auto WatertightTest<Arch, Crossing>::fallback(B ax, B ay, B bx, B by, B cx, B cy
     const double dv = double(fax[i]) * double(fcy[i]) - double(fay[i]) * double(fcx[i]);
     const double dw = double(fbx[i]) * double(fay[i]) - double(fby[i]) * double(fax[i]);
     feu[i] = float(du), fev[i] = float(dv), few[i] = float(dw);
-    // (The sheared coordinates here are negated, as Tris are; the rule takes the oracle's.)
-    if (crossing_in && core::crossing_inside(du, dv, dw, -fax[i], -fay[i], -fbx[i], -fby[i], -fcx[i], -fcy[i]))
+    if (crossing_in && core::crossing_inside(du, dv, dw, fax[i], fay[i], fbx[i], fby[i], fcx[i], fcy[i]))
       *crossing_in |= 1u << i;
   }
   return {B::load_aligned(feu), B::load_aligned(fev), B::load_aligned(few)};

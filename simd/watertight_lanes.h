@@ -20,7 +20,7 @@ auto WatertightTest<Arch, Crossing>::broadcast(const PreparedRay& r) -> Rays {
   out.tmin = B(r.ray.tmin);
   out.sx = B(r.s[0]);
   out.sy = B(r.s[1]);
-  out.sz = B(-r.s[2]);  // negated: Tris (watertight.h)
+  out.sz = B(r.s[2]);
   const float tmin = r.ray.tmin;
   out.tmin_lo = B(std::abs(r.s[2]) > 0.0f ? tmin - std::abs(tmin) * core::kScaledPad<float>
                                           : std::numeric_limits<float>::quiet_NaN());
@@ -96,7 +96,7 @@ auto WatertightTest<Arch, Crossing>::load(const PreparedPacket<K>& p, int offset
   out.tmin = B::load_aligned(p.rays.tmin + offset);
   out.sx = B::load_aligned(p.s[0] + offset);
   out.sy = B::load_aligned(p.s[1] + offset);
-  out.sz = -B::load_aligned(p.s[2] + offset);  // negated: Tris (watertight.h)
+  out.sz = B::load_aligned(p.s[2] + offset);
   out.tmin_lo =
       xsimd::select(xsimd::abs(out.sz) > B(0.0f), out.tmin - xsimd::abs(out.tmin) * B(core::kScaledPad<float>),
                     B(std::numeric_limits<float>::quiet_NaN()));
@@ -132,17 +132,17 @@ auto WatertightTest<Arch, Crossing>::load_block(const Block& b, const Rays& r) -
   const auto at = [bytes](int k, std::size_t axis) {
     return B::load_aligned(reinterpret_cast<const float*>(bytes + k * sizeof(b.p[0]) + axis));
   };
-  return {r.okx - at(0, x), r.oky - at(0, y), r.okz - at(0, z), r.okx - at(1, x), r.oky - at(1, y),
-          r.okz - at(1, z), r.okx - at(2, x), r.oky - at(2, y), r.okz - at(2, z)};
+  return {at(0, x) - r.okx, at(0, y) - r.oky, at(0, z) - r.okz, at(1, x) - r.okx, at(1, y) - r.oky,
+          at(1, z) - r.okz, at(2, x) - r.okx, at(2, y) - r.oky, at(2, z) - r.okz};
 }
 
 template <class Arch, bool Crossing>
 template <int BW>
 auto WatertightTest<Arch, Crossing>::broadcast_uniform(const WatertightBlock<BW>& b, int j, const Rays& r) -> Tris {
   const int kx = r.kx, ky = r.ky, kz = r.kz;
-  return {r.okx - B(b.p[0][kx][j]), r.oky - B(b.p[0][ky][j]), r.okz - B(b.p[0][kz][j]),
-          r.okx - B(b.p[1][kx][j]), r.oky - B(b.p[1][ky][j]), r.okz - B(b.p[1][kz][j]),
-          r.okx - B(b.p[2][kx][j]), r.oky - B(b.p[2][ky][j]), r.okz - B(b.p[2][kz][j])};
+  return {B(b.p[0][kx][j]) - r.okx, B(b.p[0][ky][j]) - r.oky, B(b.p[0][kz][j]) - r.okz,
+          B(b.p[1][kx][j]) - r.okx, B(b.p[1][ky][j]) - r.oky, B(b.p[1][kz][j]) - r.okz,
+          B(b.p[2][kx][j]) - r.okx, B(b.p[2][ky][j]) - r.oky, B(b.p[2][kz][j]) - r.okz};
 }
 
 template <class Arch, bool Crossing>
@@ -161,15 +161,15 @@ auto WatertightTest<Arch, Crossing>::broadcast_tri(const WatertightBlock<BW>& b,
       else
         return B(_mm256_permutevar8x32_ps(_mm256_zextps128_ps256(v), axis));
     };
-    return {r.okx - pick(0, r.ikx), r.oky - pick(0, r.iky), r.okz - pick(0, r.ikz),
-            r.okx - pick(1, r.ikx), r.oky - pick(1, r.iky), r.okz - pick(1, r.ikz),
-            r.okx - pick(2, r.ikx), r.oky - pick(2, r.iky), r.okz - pick(2, r.ikz)};
+    return {pick(0, r.ikx) - r.okx, pick(0, r.iky) - r.oky, pick(0, r.ikz) - r.okz,
+            pick(1, r.ikx) - r.okx, pick(1, r.iky) - r.oky, pick(1, r.ikz) - r.okz,
+            pick(2, r.ikx) - r.okx, pick(2, r.iky) - r.oky, pick(2, r.ikz) - r.okz};
   }
   // Per-lane permutation (SSE4.2): relative coordinates along x y z, then picked per lane.
   Tris out;
   B* dst[3][3] = {{&out.akx, &out.aky, &out.akz}, {&out.bkx, &out.bky, &out.bkz}, {&out.ckx, &out.cky, &out.ckz}};
   for (int k = 0; k < 3; ++k) {
-    const B q0 = r.o[0] - B(b.p[k][0][j]), q1 = r.o[1] - B(b.p[k][1][j]), q2 = r.o[2] - B(b.p[k][2][j]);
+    const B q0 = B(b.p[k][0][j]) - r.o[0], q1 = B(b.p[k][1][j]) - r.o[1], q2 = B(b.p[k][2][j]) - r.o[2];
     *dst[k][0] = xsimd::select(r.x0, q0, xsimd::select(r.x1, q1, q2));
     *dst[k][1] = xsimd::select(r.y0, q0, xsimd::select(r.y1, q1, q2));
     *dst[k][2] = xsimd::select(r.z0, q0, xsimd::select(r.z1, q1, q2));
