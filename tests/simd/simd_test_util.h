@@ -58,8 +58,8 @@ bool skip_isa() {
 
 inline std::string name(TriangleTest t) { return std::string(volley::to_string(t)); }
 
-/// Distance in ulps between two floats of the same sign class (0 when bit-identical; NaN
-/// against anything but the same NaN bits is "far").
+/// Distance in ulps between two floats of the same sign class (0 when bit-identical; +0
+/// against -0 is 1; NaN against anything but the same NaN bits is "far").
 inline std::uint32_t ulps(float a, float b) {
   const auto key = [](float x) {
     const std::int64_t i = std::bit_cast<std::int32_t>(x);
@@ -67,6 +67,7 @@ inline std::uint32_t ulps(float a, float b) {
   };
   if (std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b)) return 0;
   if (std::isnan(a) || std::isnan(b)) return 0xffffffffu;
+  if (a == b) return 1;  // +0 against -0: a reported zero's sign is part of the answer
   const std::int64_t d = key(a) - key(b);
   return static_cast<std::uint32_t>(std::min<std::int64_t>(d < 0 ? -d : d, 0xffffffffLL));
 }
