@@ -209,9 +209,8 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
     }
     // Any hit ends a lane; the chunk ends when every active lane has one. The last block
     // ends at its `last` triangle. Uniform: one axis permutation for the packet, known for
-    // the whole loop (whose registers then hold no per-lane permutation); on AVX-512 its
-    // triangles are negated, which folds their broadcasts (WatertightTest::broadcast_negated).
-    [[maybe_unused]] constexpr bool kNegated = L == 16;
+    // the whole loop (whose registers then hold no per-lane permutation), and its rays and
+    // triangles in the any-hit form (WatertightTest::any_hit_uniform).
     const auto triangles = [&](auto uniform, const typename T::Rays& r) __attribute__((always_inline)) {
       for (std::uint32_t b = 0; b < count; ++b) {
         const Block& block = blocks[b];
@@ -219,10 +218,8 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
         for (int j = 0; j < used; ++j) {
           if constexpr (T::kDecision == detail::Decision::quotient) {
             const auto tri = [&] {
-              if constexpr (decltype(uniform)::value && kNegated)
-                return T::broadcast_negated(block, j, r);
-              else if constexpr (decltype(uniform)::value)
-                return T::broadcast_uniform(block, j, r);
+              if constexpr (decltype(uniform)::value)
+                return T::any_hit_uniform(block, j, r);
               else
                 return T::broadcast_tri(block, j, r);
             }();
@@ -242,14 +239,10 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
       }
     };
     if constexpr (T::kDecision == detail::Decision::quotient) {
-      if (r.uniform) {
-        if constexpr (kNegated)
-          triangles(std::true_type{}, T::negated(r));  // (broadcast_negated's rays)
-        else
-          triangles(std::true_type{}, r);
-      } else {
+      if (r.uniform)
+        triangles(std::true_type{}, T::any_hit_rays(r));
+      else
         triangles(std::false_type{}, r);
-      }
     } else {
       triangles(std::false_type{}, r);
     }
