@@ -55,6 +55,18 @@ std::uint32_t bits_from_mask(MaskB<Arch> m) {
   }
 }
 
+/// Bit i set when lane i of x has its sign bit set (-0 and negative NaNs included).
+template <class Arch>
+std::uint32_t sign_bits(FloatB<Arch> x) {
+  if constexpr (kHasMaskRegisters<Arch>) {
+    return static_cast<std::uint32_t>(_mm512_movepi32_mask(_mm512_castps_si512(x)));
+  } else if constexpr (kLanes<Arch> == 8) {
+    return static_cast<std::uint32_t>(_mm256_movemask_ps(x));
+  } else {
+    return static_cast<std::uint32_t>(_mm_movemask_ps(x));
+  }
+}
+
 /// Lanes where x is finite and nonzero: the oracles' `abs(x) > 0 && abs(x) <= max`, NaN
 /// false. One fpclass instruction on AVX-512 (no NaN, zero or infinity class), three
 /// operations elsewhere.

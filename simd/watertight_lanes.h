@@ -35,7 +35,7 @@ template <class Arch, bool Crossing>
 template <int K>
 void WatertightTest<Arch, Crossing>::prepare(const RayPacket<K>& rays, PreparedPacket<K>& out) {
   using I = IntB<Arch>;
-  out.rays = rays;
+  if (&out.rays != &rays) out.rays = rays;  // (the packet walk prepares its packet in place)
   std::uint32_t axes_seen = 0;  // bit (kz * 2 + swapped) of every active lane
   for (int c = 0; c < K; c += W) {
     const B dx = B::load_aligned(rays.dx + c), dy = B::load_aligned(rays.dy + c), dz = B::load_aligned(rays.dz + c);

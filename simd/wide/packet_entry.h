@@ -86,9 +86,11 @@ void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketS
     iz.store_aligned(setup.inv[2] + o);
     const std::uint32_t okb = detail::bits_from_mask<Arch>(ok);
     valid |= okb << o;
-    negx |= (detail::bits_from_mask<Arch>(ix < zero) & okb) << o;
-    negy |= (detail::bits_from_mask<Arch>(iy < zero) & okb) << o;
-    negz |= (detail::bits_from_mask<Arch>(iz < zero) & okb) << o;
+    // (1 / d < 0 exactly where d's sign bit is set, -0 included: read from d, the
+    // octant need not wait for the division.)
+    negx |= (detail::sign_bits<Arch>(dx) & okb) << o;
+    negy |= (detail::sign_bits<Arch>(dy) & okb) << o;
+    negz |= (detail::sign_bits<Arch>(dz) & okb) << o;
     zeros |= (detail::bits_from_mask<Arch>((dx == zero) | (dy == zero) | (dz == zero)) & okb) << o;
     // Rejected lanes become inert: org = dir = 0, tmin = 0, tmax = -inf.
     if (okb != kChunkBits) {

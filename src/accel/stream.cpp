@@ -2,6 +2,8 @@
 // stream walk where the scene and ISA allow it, else one by one (see volley/accel.h).
 #include <algorithm>
 #include <bit>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <immintrin.h>
@@ -23,6 +25,18 @@ int mixed_axes(const Ray* rays, std::size_t n) {
     any = _mm_or_ps(any, d);
   }
   return std::popcount(static_cast<unsigned>(_mm_movemask_ps(_mm_xor_ps(all, any)) & 7));
+}
+
+/// The 16 bits of `mask` as 16 bytes of 0 or 1 at out (byte i = bit i): each half
+/// replicated to eight bytes, bit k kept in byte k, and a kept bit carried to the byte's
+/// top bit and moved down (one store per half instead of sixteen).
+void store_lane_bytes(std::uint32_t mask, std::uint8_t* out) {
+  for (int half = 0; half < 2; ++half) {
+    const std::uint64_t kept = (std::uint64_t{(mask >> (8 * half)) & 0xffu} * 0x0101010101010101ull) &
+                               0x8040201008040201ull;
+    const std::uint64_t bytes = ((kept + 0x7f7f7f7f7f7f7f7full) >> 7) & 0x0101010101010101ull;
+    std::memcpy(out + 8 * half, &bytes, 8);
+  }
 }
 
 /// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
@@ -142,8 +156,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
       [&](std::size_t first) {
         RayPacket<16> p;
         volley::load(p, rays + first, 16);
-        const std::uint32_t mask = occluded(p, masks ? masks + first : nullptr);
-        for (std::size_t i = 0; i < 16; ++i) blocked[first + i] = static_cast<std::uint8_t>((mask >> i) & 1u);
+        store_lane_bytes(occluded(p, masks ? masks + first : nullptr), blocked + first);
       },
       [&](std::size_t i) { blocked[i] = occluded(rays[i], masks ? masks[i] : kMaskAll) ? 1 : 0; },
       [&](std::size_t i) { blocked[i] = 0; });
