@@ -17,7 +17,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
   PreparedPacket<K> prep;
   prep.rays = rays;
   detail::PacketSetup<K> setup;
-  screen(prep.rays, setup);
+  screen_inline(prep.rays, setup);
   if (setup.valid == 0) return 0;
   PacketKernels<Arch, Test, K, W>::prepare(prep.rays, prep);
   // (A tree that is one leaf gains nothing from the frustum's set-up.)
@@ -64,6 +64,11 @@ void WideKernels<Arch, Test, Robust>::all_hits(const View& bvh, const RayPacket<
 
 template <class Arch, TriangleTest Test, bool Robust>
 void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
+  screen_inline(rays, setup);
+}
+
+template <class Arch, TriangleTest Test, bool Robust>
+void WideKernels<Arch, Test, Robust>::screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   constexpr int C = K / L;
