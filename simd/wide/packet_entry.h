@@ -84,15 +84,15 @@ void WideKernels<Arch, Test, Robust>::screen_inline(RayPacket<K>& rays, detail::
     const B finite = (((ox - ox) + (oy - oy)) + ((oz - oz) + (dx - dx))) + ((dy - dy) + (dz - dz));
     const M ok = (detail::mask_from_bits<Arch>((rays.active >> o) & kChunkBits) & (finite == zero)) &
                  ((tmin == tmin) & (tmax == tmax));
-    // The oracle's reciprocal and octant (sign bit of 1 / dir: 1 / -0 = -inf < 0).
+    // The oracle's reciprocal (1 / ±0 = ±inf).
     const B ix = B(1.0f) / dx, iy = B(1.0f) / dy, iz = B(1.0f) / dz;
     ix.store_aligned(setup.inv[0] + o);
     iy.store_aligned(setup.inv[1] + o);
     iz.store_aligned(setup.inv[2] + o);
     const std::uint32_t okb = detail::bits_from_mask<Arch>(ok);
     valid |= okb << o;
-    // (1 / d < 0 exactly where d's sign bit is set, -0 included: read from d, the
-    // octant need not wait for the division.)
+    // The oracle's octant, the sign of 1 / d: d's sign bit (-0 included), read from d so
+    // that it need not wait for the division.
     negx |= (detail::sign_bits<Arch>(dx) & okb) << o;
     negy |= (detail::sign_bits<Arch>(dy) & okb) << o;
     negz |= (detail::sign_bits<Arch>(dz) & okb) << o;
