@@ -4,7 +4,8 @@
 // Half as many triangle tests as the one-triangle-per-register form when a leaf is
 // reached by eight rays or fewer. Every lane runs the same operations on the same ray and
 // triangle as in that form, so the answers are the same bit for bit.
-// AVX-512 watertight test with one axis permutation for the packet (uniform) only.
+// Watertight test with one axis permutation for the packet (uniform) only; AVX-512 (8 pairs
+// of 16 lanes) and AVX2 (4 pairs of 8).
 #pragma once
 #include <immintrin.h>
 
@@ -12,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "simd/watertight.h"
 
@@ -19,9 +21,53 @@ namespace volley::simd::detail {
 
 /// Whether PacketKernels::occluded hands chunks of few lanes to occluded_pairs.
 template <class Arch, TriangleTest Test, int BW>
-inline constexpr bool kPairedLanes = kLanes<Arch> == 16 && Test == TriangleTest::watertight && BW % 2 == 0;
+inline constexpr bool kPairedLanes = (kLanes<Arch> == 16 || std::is_same_v<Arch, Avx2>) &&
+                                     Test == TriangleTest::watertight && BW % 2 == 0;
 
-/// The lanes of `act` (at most 8 of 16) that some triangle of blocks[0 .. count) occludes,
+/// The register of 2s and 2s + 1 holding the s-th lane of `act` (the pairs' source lanes),
+/// and the way back from the pairs' hits to the rays' lanes, on AVX-512 and on AVX2.
+template <class Arch>
+struct PairLanes;
+
+template <class Arch>
+  requires(kLanes<Arch> == 16)
+struct PairLanes<Arch> {
+  __m512i from;
+  explicit PairLanes(std::uint32_t act) {
+    const __m512i rank = _mm512_maskz_compress_epi32(
+        static_cast<__mmask16>(act), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
+    from = _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
+  }
+  FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm512_permutexvar_ps(from, v)); }
+  /// Bit s of `per_pair` (pair s blocked) to the s-th lane of `act`.
+  static std::uint32_t to_rays(std::uint32_t per_pair, std::uint32_t act) {
+    const __m512i pairs = _mm512_movm_epi32(static_cast<__mmask16>(per_pair));
+    const __m512i per_ray = _mm512_maskz_compress_epi32(0x5555, pairs);
+    return _mm512_movepi32_mask(_mm512_maskz_expand_epi32(static_cast<__mmask16>(act), per_ray)) & act;
+  }
+};
+
+template <class Arch>
+  requires(kLanes<Arch> == 8)
+struct PairLanes<Arch> {
+  __m256i from;
+  explicit PairLanes(std::uint32_t act) {
+    // At most four lanes: their indices written by hand (AVX2 has no compress).
+    alignas(32) std::int32_t lanes[8] = {};
+    int s = 0;
+    for (std::uint32_t a = act; a != 0; a &= a - 1, ++s) lanes[2 * s] = lanes[2 * s + 1] = std::countr_zero(a);
+    from = _mm256_load_si256(reinterpret_cast<const __m256i*>(lanes));
+  }
+  FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm256_permutevar8x32_ps(v, from)); }
+  static std::uint32_t to_rays(std::uint32_t per_pair, std::uint32_t act) {
+    std::uint32_t out = 0;
+    for (std::uint32_t a = act; a != 0; a &= a - 1, per_pair >>= 2)
+      if (per_pair & 1u) out |= a & (0u - a);
+    return out;
+  }
+};
+
+/// The lanes of `act` (at most half the lanes) that some triangle of blocks[0 .. count) occludes,
 /// the last block's first `last` triangles only. `upper` is tmax on the active lanes (-inf elsewhere) and
 /// `sure` the sure-hit factors of that upper end, as PacketKernels::occluded holds them.
 template <class Arch, int BW>
@@ -32,13 +78,10 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
   using B = FloatB<Arch>;
   using M = MaskB<Arch>;
   const int n = std::popcount(act);
-  // Lanes 2s and 2s + 1: the s-th active ray (lanes past 2n hold a copy of the first and
+  // Lanes 2s and 2s + 1: the s-th active ray (lanes past 2n hold a copy of lane 0 and
   // an upper end of -inf, which fails every test).
-  const __m512i rank = _mm512_maskz_compress_epi32(static_cast<__mmask16>(act),
-                                                   _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
-  const __m512i from =
-      _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
-  const auto pick = [from](B v) { return B(_mm512_permutexvar_ps(from, v)); };
+  const PairLanes<Arch> lanes(act);
+  const auto pick = [&lanes](B v) { return lanes.pick(v); };
   typename T::Rays p = r;
   p.okx = pick(r.okx), p.oky = pick(r.oky), p.okz = pick(r.okz);
   p.sx = pick(r.sx), p.sy = pick(r.sy), p.sz = -pick(r.sz);  // negated: the pairs below
@@ -53,7 +96,10 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
     const auto at = [&b, j](int k, int axis) {
       double two;
       std::memcpy(&two, &b.p[k][axis][j], sizeof two);
-      return B(_mm512_castpd_ps(_mm512_set1_pd(two)));
+      if constexpr (kLanes<Arch> == 16)
+        return B(_mm512_castpd_ps(_mm512_set1_pd(two)));
+      else
+        return B(_mm256_castpd_ps(_mm256_set1_pd(two)));
     };
     return typename T::Tris{p.okx - at(0, p.kx), p.oky - at(0, p.ky), p.okz - at(0, p.kz),
                             p.okx - at(1, p.kx), p.oky - at(1, p.ky), p.okz - at(1, p.kz),
@@ -81,9 +127,7 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
   }
   // A ray is occluded when either lane of its pair is: bit 2s of the pairs to bit s, then
   // to the ray's own lane.
-  const __m512i pairs = _mm512_movm_epi32(static_cast<__mmask16>(either(bits_from_mask<Arch>(hit))));
-  const __m512i per_ray = _mm512_maskz_compress_epi32(0x5555, pairs);
-  return _mm512_movepi32_mask(_mm512_maskz_expand_epi32(static_cast<__mmask16>(act), per_ray)) & act;
+  return PairLanes<Arch>::to_rays(either(bits_from_mask<Arch>(hit)), act);
 }
 
 }  // namespace volley::simd::detail
