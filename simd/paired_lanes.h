@@ -2,7 +2,7 @@
 // rays are gathered into lane pairs (lanes 2s and 2s + 1 both hold the s-th active ray),
 // and each register tests triangles j and j + 1 of a block, one in each lane of a pair.
 // Half as many triangle tests as the one-triangle-per-register form when a leaf is
-// reached by eight rays or fewer. Every lane runs the same operations on the same ray and
+// reached by half a chunk's lanes or fewer. Every lane runs the same operations on the same ray and
 // triangle as in that form, so the answers are the same bit for bit.
 // Watertight test with one axis permutation for the packet (uniform) only; AVX-512 (8 pairs
 // of 16 lanes) and AVX2 (4 pairs of 8).
@@ -24,8 +24,8 @@ template <class Arch, TriangleTest Test, int BW>
 inline constexpr bool kPairedLanes = (kLanes<Arch> == 16 || std::is_same_v<Arch, Avx2>) &&
                                      Test == TriangleTest::watertight && BW % 2 == 0;
 
-/// The register of 2s and 2s + 1 holding the s-th lane of `act` (the pairs' source lanes),
-/// and the way back from the pairs' hits to the rays' lanes, on AVX-512 and on AVX2.
+/// The s-th lane of `act` into lanes 2s and 2s + 1 (pick), and back from the pairs' hits
+/// to the rays' lanes (to_rays), on AVX-512 and on AVX2.
 template <class Arch>
 struct PairLanes;
 
@@ -39,7 +39,7 @@ struct PairLanes<Arch> {
     from = _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
   }
   FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm512_permutexvar_ps(from, v)); }
-  /// Bit s of `per_pair` (pair s blocked) to the s-th lane of `act`.
+  /// Bit 2s of `per_pair` (pair s blocked) to the s-th lane of `act`.
   static std::uint32_t to_rays(std::uint32_t per_pair, std::uint32_t act) {
     const __m512i pairs = _mm512_movm_epi32(static_cast<__mmask16>(per_pair));
     const __m512i per_ray = _mm512_maskz_compress_epi32(0x5555, pairs);
