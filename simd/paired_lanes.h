@@ -2,8 +2,8 @@
 // rays are gathered into lane pairs (lanes 2s and 2s + 1 both hold the s-th active ray),
 // and each register tests triangles j and j + 1 of a block, one in each lane of a pair.
 // Half as many triangle tests as the one-triangle-per-register form when a leaf is
-// reached by half a chunk's lanes or fewer. Every lane runs the same operations on the same ray and
-// triangle as in that form, so the answers are the same bit for bit.
+// reached by half a chunk's lanes or fewer. Every lane runs the same operations on the
+// same ray and triangle as in that form, so the answers are the same bit for bit.
 // Watertight test with one axis permutation for the packet (uniform) only; AVX-512 (8 pairs
 // of 16 lanes) and AVX2 (4 pairs of 8).
 #pragma once
@@ -19,13 +19,15 @@
 
 namespace volley::simd::detail {
 
-/// Whether PacketKernels::occluded hands chunks of few lanes to occluded_pairs.
+/// Whether PacketKernels::occluded hands chunks of few lanes to occluded_pairs: AVX-512 and
+/// AVX2, where it was measured (Avx512Ymm's packet kernels serve no walk).
 template <class Arch, TriangleTest Test, int BW>
 inline constexpr bool kPairedLanes = (kLanes<Arch> == 16 || std::is_same_v<Arch, Avx2>) &&
                                      Test == TriangleTest::watertight && BW % 2 == 0;
 
-/// The s-th lane of `act` into lanes 2s and 2s + 1 (pick), and back from the pairs' hits
-/// to the rays' lanes (to_rays), on AVX-512 and on AVX2.
+/// What differs between AVX-512 and AVX2: the s-th lane of `act` into lanes 2s and 2s + 1
+/// (pick), a triangle pair's two floats into every pair of lanes (broadcast), and back from
+/// the pairs' hits to the rays' lanes (to_rays).
 template <class Arch>
 struct PairLanes;
 
@@ -39,6 +41,7 @@ struct PairLanes<Arch> {
     from = _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
   }
   FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm512_permutexvar_ps(from, v)); }
+  static FloatB<Arch> broadcast(double two) { return FloatB<Arch>(_mm512_castpd_ps(_mm512_set1_pd(two))); }
   /// Bit 2s of `per_pair` (pair s blocked) to the s-th lane of `act`.
   static std::uint32_t to_rays(std::uint32_t per_pair, std::uint32_t act) {
     const __m512i pairs = _mm512_movm_epi32(static_cast<__mmask16>(per_pair));
@@ -59,6 +62,7 @@ struct PairLanes<Arch> {
     from = _mm256_load_si256(reinterpret_cast<const __m256i*>(lanes));
   }
   FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm256_permutevar8x32_ps(v, from)); }
+  static FloatB<Arch> broadcast(double two) { return FloatB<Arch>(_mm256_castpd_ps(_mm256_set1_pd(two))); }
   static std::uint32_t to_rays(std::uint32_t per_pair, std::uint32_t act) {
     std::uint32_t out = 0;
     for (std::uint32_t a = act; a != 0; a &= a - 1, per_pair >>= 2)
@@ -81,14 +85,13 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
   // Lanes 2s and 2s + 1: the s-th active ray (lanes past 2n hold a copy of lane 0 and
   // an upper end of -inf, which fails every test).
   const PairLanes<Arch> lanes(act);
-  const auto pick = [&lanes](B v) { return lanes.pick(v); };
   typename T::Rays p = r;
-  p.okx = pick(r.okx), p.oky = pick(r.oky), p.okz = pick(r.okz);
-  p.sx = pick(r.sx), p.sy = pick(r.sy), p.sz = -pick(r.sz);  // negated: the pairs below
-  p.tmin = pick(r.tmin), p.tmin_lo = pick(r.tmin_lo);
+  p.okx = lanes.pick(r.okx), p.oky = lanes.pick(r.oky), p.okz = lanes.pick(r.okz);
+  p.sx = lanes.pick(r.sx), p.sy = lanes.pick(r.sy), p.sz = -lanes.pick(r.sz);  // negated: the pairs below
+  p.tmin = lanes.pick(r.tmin), p.tmin_lo = lanes.pick(r.tmin_lo);
   const std::uint32_t live = (1u << (2 * n)) - 1u;
-  const B up = xsimd::select(mask_from_bits<Arch>(live), pick(upper), B(-std::numeric_limits<float>::infinity()));
-  const typename T::SureRange s{pick(sure.lo), pick(sure.hi)};
+  const B up = xsimd::select(mask_from_bits<Arch>(live), lanes.pick(upper), B(-std::numeric_limits<float>::infinity()));
+  const typename T::SureRange s{lanes.pick(sure.lo), lanes.pick(sure.hi)};
   // Triangles j and j + 1 (j even) in the two lanes of every pair: the two floats
   // broadcast as one double, which is a plain load (a float pair broadcast takes a
   // shuffle more), origin minus vertex as WatertightTest::broadcast_negated.
@@ -96,10 +99,7 @@ std::uint32_t occluded_pairs(const typename WatertightTest<Arch>::Rays& r, Float
     const auto at = [&b, j](int k, int axis) {
       double two;
       std::memcpy(&two, &b.p[k][axis][j], sizeof two);
-      if constexpr (kLanes<Arch> == 16)
-        return B(_mm512_castpd_ps(_mm512_set1_pd(two)));
-      else
-        return B(_mm256_castpd_ps(_mm256_set1_pd(two)));
+      return PairLanes<Arch>::broadcast(two);
     };
     return typename T::Tris{p.okx - at(0, p.kx), p.oky - at(0, p.ky), p.okz - at(0, p.kz),
                             p.okx - at(1, p.kx), p.oky - at(1, p.ky), p.okz - at(1, p.kz),
