@@ -2,6 +2,7 @@
 // oracle's box test of one child for each lane: the per-lane test of the per-lane walk
 // (packet_walk.h) and of the frustum walk's leaves (frustum_walk.h).
 #pragma once
+#include <bit>
 #include <cstdint>
 #include <limits>
 
@@ -18,6 +19,8 @@ struct PacketLanes {
   static constexpr int L = kLanes<Arch>;
   static constexpr int C = K / L;  // chunks of L lanes
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
+  static constexpr std::int32_t kLaneBit[16] = {1,     2,     4,     8,     16,    32,     64,     128,
+                                                256,   512,   1024,  2048,  4096,  8192,  16384, 32768};
 
   // Origin, reciprocal direction (the oracle's, ±inf for ±0), tmin and the current upper end
   // tfar of every lane (invalid or finished lanes: -inf).
@@ -103,6 +106,45 @@ struct PacketLanes {
     const B tfz = fused_mul_sub<Arch>(B(node.bounds[np[2] ^ 1][j]), f.fi[2][c], f.cf[2][c]);
     entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
     exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, far_pad)));
+  }
+
+  /// The children that each lane of `bits` enters, as one lane bit per child lane: the
+  /// test of slabs() turned around, one lane against all eight children (the same
+  /// operations on the same values, so the same answer bit for bit). Cheaper than a test
+  /// per child and chunk where fewer lanes reach a node than it has children times chunks,
+  /// which on AVX2 is most nodes of an any-hit walk. Uniform: every lane's near planes are
+  /// np; otherwise each lane's own, by the signs of its reciprocal. The lanes' values are
+  /// read from the packet (rays, reciprocals, far ends at `far`).
+  template <bool Uniform>
+  [[gnu::always_inline]] static IntB<Arch> lanes_enter(const WideNode<kWideN>& node, const int np[3],
+                                                       std::uint32_t bits, const RayPacket<K>& rays,
+                                                       const PacketSetup<K>& setup, const float* far, B pad) {
+    static_assert(L == kWideN, "one lane per child");
+    using I = IntB<Arch>;
+    B near[3], farp[3];
+    if constexpr (Uniform)
+      for (int a = 0; a < 3; ++a) {
+        near[a] = B::load_aligned(node.bounds[np[a]]);
+        farp[a] = B::load_aligned(node.bounds[np[a] ^ 1]);
+      }
+    I entered(0);
+    for (; bits != 0; bits &= bits - 1) {
+      const int i = std::countr_zero(bits);
+      if constexpr (!Uniform)
+        for (int a = 0; a < 3; ++a) {
+          const int n = 2 * a + (setup.inv[a][i] < 0.0f ? 1 : 0);
+          near[a] = B::load_aligned(node.bounds[n]);
+          farp[a] = B::load_aligned(node.bounds[n ^ 1]);
+        }
+      const B ox(rays.ox[i]), oy(rays.oy[i]), oz(rays.oz[i]);
+      const B ix(setup.inv[0][i]), iy(setup.inv[1][i]), iz(setup.inv[2][i]);
+      const B tnx = (near[0] - ox) * ix, tny = (near[1] - oy) * iy, tnz = (near[2] - oz) * iz;
+      const B tfx = (farp[0] - ox) * ix, tfy = (farp[1] - oy) * iy, tfz = (farp[2] - oz) * iz;
+      const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, B(rays.tmin[i]))));
+      const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, B(far[i])))) * pad;
+      entered = entered | xsimd::select(xsimd::bool_cast(entry <= exit), I(kLaneBit[i]), I(0));
+    }
+    return entered;
   }
 
   /// The largest tfar of any lane.

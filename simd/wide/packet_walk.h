@@ -17,7 +17,9 @@ namespace volley::simd {
 // a subtree while its entry distance is within its current tmax (padded). Children are
 // visited nearest first by the heuristic "any lane enters it before the current best",
 // or, for a query with kNearFirst = false (any hit), in slot order as single rays; such a
-// query's stack holds each subtree's entering lanes as bits instead of distances.
+// query's stack holds each subtree's entering lanes as bits instead of distances; where a
+// register holds one lane per child (AVX2), such a query tests each node lane by lane
+// against all its children (PacketLanes::lanes_enter) instead of child by child.
 // Deferred hand-offs (a view that defers them, a query that allows it, one octant): a
 // subtree left to single rays is requested and listed, and the listed walks run after the
 // packet's own, each interior start's children requested first, so that the misses of a
@@ -61,6 +63,14 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   // Any hit: a lane's upper end only falls when the lane finishes, so whether it is active
   // in a stacked subtree is decided at the push (its entry bits), not re-tested at the pop.
   constexpr bool kBits = !Query::kNearFirst;
+  // Any hit with one lane per child (AVX2): each node is tested lane by lane against all
+  // its children (PacketLanes::lanes_enter) instead of child by child for each chunk of
+  // lanes, the lanes' far ends read from memory (they do not change until a lane finishes,
+  // and a finished lane leaves `bits`).
+  constexpr bool kLaneNodes = kBits && L == N;
+  alignas(64) float lane_far[kLaneNodes ? K : 1];
+  if constexpr (kLaneNodes)
+    for (int c = 0; c < C; ++c) tfar[c].store_aligned(lane_far + c * L);
   alignas(64) float stack_dist[kBits ? 1 : detail::kWideStack][K];
   std::uint32_t stack_bits[kBits ? detail::kWideStack : 1];
   std::uint32_t stack_ref[detail::kWideStack];
@@ -190,15 +200,29 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;
-          for (int j = 0; j < N; ++j) {
-            const std::uint32_t child = node.child[j];
-            if (child == wide_ref::kEmptyRef) break;  // used children come first
-            B dist[C];
-            std::uint32_t entered;
-            const bool any = enter(j, dist, entered);
-            stack_ref[size] = child;
-            stack_bits[size] = entered;
-            size += any ? 1 : 0;
+          if constexpr (kLaneNodes) {
+            alignas(64) std::uint32_t entered[N];
+            xsimd::store_aligned(reinterpret_cast<std::int32_t*>(entered),
+                                 detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup,
+                                                                                            lane_far, pad));
+            for (int j = 0; j < N; ++j) {
+              const std::uint32_t child = node.child[j];
+              if (child == wide_ref::kEmptyRef) break;  // used children come first
+              stack_ref[size] = child;
+              stack_bits[size] = entered[j];
+              size += entered[j] != 0 ? 1 : 0;
+            }
+          } else {
+            for (int j = 0; j < N; ++j) {
+              const std::uint32_t child = node.child[j];
+              if (child == wide_ref::kEmptyRef) break;  // used children come first
+              B dist[C];
+              std::uint32_t entered;
+              const bool any = enter(j, dist, entered);
+              stack_ref[size] = child;
+              stack_bits[size] = entered;
+              size += any ? 1 : 0;
+            }
           }
           if (size != base) {
             --size;
