@@ -12,6 +12,11 @@ endif()
 add_test(NAME perf.tools COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/test_tools.py)
 set_tests_properties(perf.tools PROPERTIES LABELS perf TIMEOUT 60)
 
+# perf/ab.sh, the A/B of two volley executables: its refusals and its summary line.
+add_test(NAME perf.ab_script COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_ab_script.py
+                                     $<TARGET_FILE:volley_cli>)
+set_tests_properties(perf.ab_script PROPERTIES LABELS perf TIMEOUT 120)
+
 # The rest needs volley_bench (built when Google Benchmark is found; see the top level).
 if(VOLLEY_BUILD_BENCH AND benchmark_FOUND)
   set(bench $<TARGET_FILE:volley_bench>)

@@ -19,8 +19,9 @@ struct PacketLanes {
   static constexpr int L = kLanes<Arch>;
   static constexpr int C = K / L;  // chunks of L lanes
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
-  static constexpr std::int32_t kLaneBit[16] = {1,     2,     4,     8,     16,    32,     64,     128,
-                                                256,   512,   1024,  2048,  4096,  8192,  16384, 32768};
+  // Lane i's bit, read by a broadcast from memory (1 << i in a register takes three steps).
+  static constexpr std::int32_t kLaneBit[16] = {1,   2,   4,    8,    16,   32,   64,    128,
+                                                256, 512, 1024, 2048, 4096, 8192, 16384, 32768};
 
   // Origin, reciprocal direction (the oracle's, ±inf for ±0), tmin and the current upper end
   // tfar of every lane (invalid or finished lanes: -inf).
@@ -121,11 +122,11 @@ struct PacketLanes {
                                                        const PacketSetup<K>& setup, const float* far, B pad) {
     static_assert(L == kWideN, "one lane per child");
     using I = IntB<Arch>;
-    B near[3], farp[3];
+    B near_plane[3], far_plane[3];
     if constexpr (Uniform)
       for (int a = 0; a < 3; ++a) {
-        near[a] = B::load_aligned(node.bounds[np[a]]);
-        farp[a] = B::load_aligned(node.bounds[np[a] ^ 1]);
+        near_plane[a] = B::load_aligned(node.bounds[np[a]]);
+        far_plane[a] = B::load_aligned(node.bounds[np[a] ^ 1]);
       }
     I entered(0);
     for (; bits != 0; bits &= bits - 1) {
@@ -133,13 +134,13 @@ struct PacketLanes {
       if constexpr (!Uniform)
         for (int a = 0; a < 3; ++a) {
           const int n = 2 * a + (setup.inv[a][i] < 0.0f ? 1 : 0);
-          near[a] = B::load_aligned(node.bounds[n]);
-          farp[a] = B::load_aligned(node.bounds[n ^ 1]);
+          near_plane[a] = B::load_aligned(node.bounds[n]);
+          far_plane[a] = B::load_aligned(node.bounds[n ^ 1]);
         }
-      const B ox(rays.ox[i]), oy(rays.oy[i]), oz(rays.oz[i]);
-      const B ix(setup.inv[0][i]), iy(setup.inv[1][i]), iz(setup.inv[2][i]);
-      const B tnx = (near[0] - ox) * ix, tny = (near[1] - oy) * iy, tnz = (near[2] - oz) * iz;
-      const B tfx = (farp[0] - ox) * ix, tfy = (farp[1] - oy) * iy, tfz = (farp[2] - oz) * iz;
+      const B lx(rays.ox[i]), ly(rays.oy[i]), lz(rays.oz[i]);  // lane i's origin and reciprocal
+      const B rx(setup.inv[0][i]), ry(setup.inv[1][i]), rz(setup.inv[2][i]);
+      const B tnx = (near_plane[0] - lx) * rx, tny = (near_plane[1] - ly) * ry, tnz = (near_plane[2] - lz) * rz;
+      const B tfx = (far_plane[0] - lx) * rx, tfy = (far_plane[1] - ly) * ry, tfz = (far_plane[2] - lz) * rz;
       const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, B(rays.tmin[i]))));
       const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, B(far[i])))) * pad;
       entered = entered | xsimd::select(xsimd::bool_cast(entry <= exit), I(kLaneBit[i]), I(0));

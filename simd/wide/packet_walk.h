@@ -203,8 +203,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           if constexpr (kLaneNodes) {
             alignas(64) std::uint32_t entered[N];
             xsimd::store_aligned(reinterpret_cast<std::int32_t*>(entered),
-                                 detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup,
-                                                                                            lane_far, pad));
+                                 detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays,
+                                                                                             setup, lane_far, pad));
             for (int j = 0; j < N; ++j) {
               const std::uint32_t child = node.child[j];
               if (child == wide_ref::kEmptyRef) break;  // used children come first

@@ -40,16 +40,18 @@ void store_lane_bytes(std::uint32_t mask, std::uint8_t* out) {
 }
 
 /// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
-/// (Accel::Impl::stream_packets), and one octant, or on AVX-512 any octants where the walk
-/// needs no order (occlusion, every hit): closest-hit runs of mixed octants went faster ray
-/// by ray there too, occlusion runs straddling an axis plane (shadow rays) as packets
-/// (perf/rays.md). Scenes with instances: any octants, since the packet shares the top
-/// level's walk (perf/instances.md).
+/// (Accel::Impl::stream_packets), and one octant, or on AVX-512 and AVX2 any octants where
+/// the walk needs no order (occlusion, every hit): closest-hit runs of mixed octants went
+/// faster ray by ray there too, occlusion runs straddling an axis plane (shadow rays) as
+/// packets (perf/rays.md; on AVX2 since its any-hit walk tests nodes lane by lane, session
+/// 27). Scenes with instances: any octants, since the packet shares the top level's walk
+/// (perf/instances.md).
 /// `axes`: mixed_axes of the run, when known (-1: not yet).
 template <class Impl>
 bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {
   return n == 16 && impl.stream_packets &&
-         (impl.has_instances || (impl.isa == Isa::avx512 && !ordered) || (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
+         (impl.has_instances || ((impl.isa == Isa::avx512 || impl.isa == Isa::avx2) && !ordered) ||
+          (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
 }
 
 /// The rays of a stream left to the stream walk, copied together (per thread, reused), or
