@@ -20,7 +20,7 @@ if [ $# -lt 4 ]; then
 fi
 OPTIONS=${5:-} PAIRS=${6:-6} REPS=${REPS:-20}
 for exe in "$1" "$2"; do
-  [ -f "$exe" ] && [ -x "$exe" ] || { echo "ab.sh: $exe is not an executable" >&2; exit 2; }
+  [[ -f "$exe" && -x "$exe" ]] || { echo "ab.sh: $exe is not an executable" >&2; exit 2; }
 done
 for file in "$3" "$4"; do
   [ -f "$file" ] || { echo "ab.sh: $file: no such file" >&2; exit 2; }
@@ -34,15 +34,20 @@ if cmp -s "$A" "$B"; then
   echo "ab.sh: $A and $B are the same executable (rebuild with --target volley_cli)" >&2
   exit 2
 fi
+# The rate of one run; the run's own output (warnings, errors) shown only when it has none.
 rate() {
+  local out
   # shellcheck disable=SC2086  # OPTIONS is a list of options
-  "$1" trace "$SCENE" --scenes "$SCENES" --rays "$RAYS" $OPTIONS --reps "$REPS" --threads 1 |
-    sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p'
+  out=$("$1" trace "$SCENE" --scenes "$SCENES" --rays "$RAYS" $OPTIONS --reps "$REPS" --threads 1 2>&1) || true
+  sed -nE 's/^trace: .*Mrays\/s=([0-9.]+).*/\1/p' <<< "$out" | grep . || { echo "$out" >&2; return 1; }
 }
 as="" bs=""
 for ((i = 0; i < PAIRS; ++i)); do
-  if ((i % 2 == 0)); then a=$(rate "$A"); b=$(rate "$B"); else b=$(rate "$B"); a=$(rate "$A"); fi
-  [ -n "$a" ] && [ -n "$b" ] || { echo "ab.sh: a trace run printed no rate" >&2; exit 1; }
+  if ((i % 2 == 0)); then
+    a=$(rate "$A") && b=$(rate "$B")
+  else
+    b=$(rate "$B") && a=$(rate "$A")
+  fi || { echo "ab.sh: a trace run printed no rate (its output above)" >&2; exit 1; }
   as="$as $a" bs="$bs $b"
 done
 python3 - "$as" "$bs" "$(basename "$SCENE") $(basename "$RAYS") $OPTIONS" <<'EOF'

@@ -40,6 +40,8 @@ def main():
         os.chmod(wrapper, os.stat(wrapper).st_mode | stat.S_IXUSR)
         rc, out, err = run([volley, wrapper, scene, rays, "--occluded --mode stream", "x"])
         assert rc == 2 and "PAIRS must be a positive integer" in err, (rc, out, err)
+        rc, out, err = run([volley, wrapper, scene, rays, "--no-such-option", "1"], dict(os.environ, REPS="1"))
+        assert rc == 1 and "printed no rate" in err and "--no-such-option" in err, (rc, out, err)
         rc, out, err = run([volley, wrapper, scene, rays, "--occluded --mode stream", "2"], dict(os.environ, REPS="2"))
         assert rc == 0, (rc, out, err)
         assert re.search(r"^cornell\.json shadow\.vray --occluded --mode stream: A [0-9.]+ B [0-9.]+ Mrays/s, "
