@@ -121,6 +121,7 @@ struct PacketLanes {
                                                        std::uint32_t bits, const RayPacket<K>& rays,
                                                        const PacketSetup<K>& setup, const float* far, B pad) {
     static_assert(L == kWideN, "one lane per child");
+    static_assert(K <= 16, "kLaneBit holds 16 lanes");
     using I = IntB<Arch>;
     B near_plane[3], far_plane[3];
     if constexpr (Uniform)
