@@ -73,10 +73,16 @@ void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const Pr
   // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
   // far the other.
   const int negative = _mm_movemask_ps(inv);
-  int near_plane[3];
-  for (int a = 0; a < 3; ++a) near_plane[a] = 2 * a + ((negative >> a) & 1);
-  const int fx = near_plane[0] ^ 1, fy = near_plane[1] ^ 1, fz = near_plane[2] ^ 1;
-  const int nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
+  // The planes as byte offsets into a node's boxes: an address is then the node plus an
+  // offset, with no index to widen and scale at every node.
+  std::size_t near_plane[3];
+  for (int a = 0; a < 3; ++a) near_plane[a] = (2 * a + ((negative >> a) & 1)) * sizeof(WideNode<N>::bounds[0]);
+  constexpr std::size_t kFarPlane = sizeof(WideNode<N>::bounds[0]);  // a far plane's offset from its near one
+  const std::size_t nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
+  const std::size_t fx = nx ^ kFarPlane, fy = ny ^ kFarPlane, fz = nz ^ kFarPlane;
+  const auto plane = [](const WideNode<N>& node, std::size_t offset) {
+    return reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(node.bounds) + offset);
+  };
   const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
   const auto ix = V8::template lane<0>(inv), iy = V8::template lane<1>(inv), iz = V8::template lane<2>(inv);
   const auto tmin = V8::set1(ray.tmin);
@@ -130,19 +136,19 @@ void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const Pr
       _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);
       typename V8::V tnx, tny, tnz, tfx, tfy, tfz;
       if constexpr (kFused) {
-        tnx = V8::fmsub(V8::load(node.bounds[nx]), ix, cnx);
-        tny = V8::fmsub(V8::load(node.bounds[ny]), iy, cny);
-        tnz = V8::fmsub(V8::load(node.bounds[nz]), iz, cnz);
-        tfx = V8::fmsub(V8::load(node.bounds[fx]), fix, cfx);
-        tfy = V8::fmsub(V8::load(node.bounds[fy]), fiy, cfy);
-        tfz = V8::fmsub(V8::load(node.bounds[fz]), fiz, cfz);
+        tnx = V8::fmsub(V8::load(plane(node, nx)), ix, cnx);
+        tny = V8::fmsub(V8::load(plane(node, ny)), iy, cny);
+        tnz = V8::fmsub(V8::load(plane(node, nz)), iz, cnz);
+        tfx = V8::fmsub(V8::load(plane(node, fx)), fix, cfx);
+        tfy = V8::fmsub(V8::load(plane(node, fy)), fiy, cfy);
+        tfz = V8::fmsub(V8::load(plane(node, fz)), fiz, cfz);
       } else {
-        tnx = V8::mul(V8::sub(V8::load(node.bounds[nx]), ox), ix);
-        tny = V8::mul(V8::sub(V8::load(node.bounds[ny]), oy), iy);
-        tnz = V8::mul(V8::sub(V8::load(node.bounds[nz]), oz), iz);
-        tfx = V8::mul(V8::sub(V8::load(node.bounds[fx]), ox), fix);
-        tfy = V8::mul(V8::sub(V8::load(node.bounds[fy]), oy), fiy);
-        tfz = V8::mul(V8::sub(V8::load(node.bounds[fz]), oz), fiz);
+        tnx = V8::mul(V8::sub(V8::load(plane(node, nx)), ox), ix);
+        tny = V8::mul(V8::sub(V8::load(plane(node, ny)), oy), iy);
+        tnz = V8::mul(V8::sub(V8::load(plane(node, nz)), oz), iz);
+        tfx = V8::mul(V8::sub(V8::load(plane(node, fx)), ox), fix);
+        tfy = V8::mul(V8::sub(V8::load(plane(node, fy)), oy), fiy);
+        tfz = V8::mul(V8::sub(V8::load(plane(node, fz)), oz), fiz);
       }
       typename V8::V entry, exit;
       if constexpr (NoZero) {
