@@ -200,29 +200,27 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;
-          if constexpr (kLaneNodes) {
-            alignas(64) std::uint32_t entered[N];
-            xsimd::store_aligned(reinterpret_cast<std::int32_t*>(entered),
+          // On AVX2 the entered lanes of every child at once (lanes_enter), else child by child.
+          alignas(64) std::uint32_t lane_entered[kLaneNodes ? N : 1];
+          if constexpr (kLaneNodes)
+            xsimd::store_aligned(reinterpret_cast<std::int32_t*>(lane_entered),
                                  detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays,
                                                                                              setup, lane_far, pad));
-            for (int j = 0; j < N; ++j) {
-              const std::uint32_t child = node.child[j];
-              if (child == wide_ref::kEmptyRef) break;  // used children come first
-              stack_ref[size] = child;
-              stack_bits[size] = entered[j];
-              size += entered[j] != 0 ? 1 : 0;
-            }
-          } else {
-            for (int j = 0; j < N; ++j) {
-              const std::uint32_t child = node.child[j];
-              if (child == wide_ref::kEmptyRef) break;  // used children come first
+          for (int j = 0; j < N; ++j) {
+            const std::uint32_t child = node.child[j];
+            if (child == wide_ref::kEmptyRef) break;  // used children come first
+            std::uint32_t entered;
+            bool any;
+            if constexpr (kLaneNodes) {
+              entered = lane_entered[j];
+              any = entered != 0;
+            } else {
               B dist[C];
-              std::uint32_t entered;
-              const bool any = enter(j, dist, entered);
-              stack_ref[size] = child;
-              stack_bits[size] = entered;
-              size += any ? 1 : 0;
+              any = enter(j, dist, entered);
             }
+            stack_ref[size] = child;
+            stack_bits[size] = entered;
+            size += any ? 1 : 0;
           }
           if (size != base) {
             --size;
