@@ -2,7 +2,6 @@
 // kept between calls. Baseline code with out-of-line members: a per-ISA object must not
 // define the containers' functions (docs/style.md rule 2).
 #pragma once
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -38,36 +37,6 @@ class StreamScratch {
   struct Buffers;
   std::unique_ptr<Buffers> buffers_;
 };
-
-/// For compressing the set lanes of an 8-bit mask to the front with one permute (AVX2 has
-/// no compress instruction): entry m packs, 3 bits each from the lowest, the lanes of m's
-/// set bits in order.
-inline constexpr std::array<std::uint32_t, 256> kCompressLanes8 = [] {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t m = 0; m < 256; ++m) {
-    int n = 0;
-    for (std::uint32_t lane = 0; lane < 8; ++lane)
-      if ((m >> lane) & 1u) table[m] |= lane << (3 * n++);
-  }
-  return table;
-}();
-
-/// For compressing the set lanes of a 4-bit mask to the front with one byte shuffle (SSE4.2:
-/// pshufb): entry m is the 16 shuffle bytes at [16 m, 16 m + 16), the 32-bit lanes of m's set
-/// bits in order, then zeros (0x80).
-inline constexpr std::array<std::uint8_t, 256> kCompressBytes4 = [] {
-  std::array<std::uint8_t, 256> table{};
-  for (std::uint32_t m = 0; m < 16; ++m) {
-    for (std::uint32_t b = 0; b < 16; ++b) table[16 * m + b] = 0x80;
-    std::uint32_t n = 0;
-    for (std::uint32_t lane = 0; lane < 4; ++lane)
-      if ((m >> lane) & 1u) {
-        for (std::uint32_t k = 0; k < 4; ++k) table[16 * m + 4 * n + k] = static_cast<std::uint8_t>(4 * lane + k);
-        ++n;
-      }
-  }
-  return table;
-}();
 
 /// The calling thread's scratch.
 StreamScratch& stream_scratch();

@@ -75,6 +75,12 @@ namespace detail {
 template <class Arch>
 inline constexpr bool kFusedLanes = kHasFma<Arch> && kLanes<Arch> == 16;
 
+/// Whether the any-hit packet walk tests a node lane by lane, each lane against all eight
+/// children in one register (PacketLanes::lanes_enter): where a register holds one lane per
+/// child (AVX2).
+template <class Arch>
+inline constexpr bool kLaneByLane = kLanes<Arch> == kWideN;
+
 /// The walk a packet takes, chosen by WideKernels::screen from its valid lanes.
 enum class PacketWalk : std::uint32_t {
   mixed_octants = 0,  ///< the per-lane walk, each lane ordering children by its own octant

@@ -2,6 +2,8 @@
 // oracle's box test of one child for each lane: the per-lane test of the per-lane walk
 // (packet_walk.h) and of the frustum walk's leaves (frustum_walk.h).
 #pragma once
+#include <immintrin.h>
+
 #include <bit>
 #include <cstdint>
 #include <limits>
@@ -117,19 +119,18 @@ struct PacketLanes {
   /// np; otherwise each lane's own, by the signs of its reciprocal. The lanes' values are
   /// read from the packet (rays, reciprocals, far ends at `far`).
   template <bool Uniform>
-  [[gnu::always_inline]] static IntB<Arch> lanes_enter(const WideNode<kWideN>& node, const int np[3],
-                                                       std::uint32_t bits, const RayPacket<K>& rays,
-                                                       const PacketSetup<K>& setup, const float* far, B pad) {
-    static_assert(L == kWideN, "one lane per child");
+  [[gnu::always_inline]] static __m256i lanes_enter(const WideNode<kWideN>& node, const int np[3], std::uint32_t bits,
+                                                    const RayPacket<K>& rays, const PacketSetup<K>& setup,
+                                                    const float* far, B pad) {
+    static_assert(L == kWideN && L == 8, "one lane per child");
     static_assert(K <= 16, "kLaneBit holds 16 lanes");
-    using I = IntB<Arch>;
     B near_plane[3], far_plane[3];
     if constexpr (Uniform)
       for (int a = 0; a < 3; ++a) {
         near_plane[a] = B::load_aligned(node.bounds[np[a]]);
         far_plane[a] = B::load_aligned(node.bounds[np[a] ^ 1]);
       }
-    I entered(0);
+    __m256i entered = _mm256_setzero_si256();
     for (; bits != 0; bits &= bits - 1) {
       const int i = std::countr_zero(bits);
       if constexpr (!Uniform)
@@ -144,7 +145,9 @@ struct PacketLanes {
       const B tfx = (far_plane[0] - lx) * rx, tfy = (far_plane[1] - ly) * ry, tfz = (far_plane[2] - lz) * rz;
       const B entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, B(rays.tmin[i]))));
       const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, B(far[i])))) * pad;
-      entered = entered | xsimd::select(xsimd::bool_cast(entry <= exit), I(kLaneBit[i]), I(0));
+      // Lane i's bit in the children it enters (an and of the compare, no select).
+      const __m256i hit = _mm256_castps_si256(_mm256_cmp_ps(entry, exit, _CMP_LE_OQ));
+      entered = _mm256_or_si256(entered, _mm256_and_si256(hit, _mm256_set1_epi32(kLaneBit[i])));
     }
     return entered;
   }

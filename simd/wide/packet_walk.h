@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "simd/wide/compress.h"
 #include "simd/wide/node_lanes.h"
 #include "simd/wide/packet_lanes.h"
 #include "simd/wide/queries.h"
@@ -44,6 +45,15 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   const float kNaN = std::numeric_limits<float>::quiet_NaN();
   const B pad(Robust ? core::kSlabExitPad : 1.0f);
 
+  // Any hit: a lane's upper end only falls when the lane finishes, so whether it is active
+  // in a stacked subtree is decided at the push (its entry bits), not re-tested at the pop.
+  constexpr bool kBits = !Query::kNearFirst;
+  // Any hit with one lane per child (AVX2, kLaneByLane): each node is tested lane by lane
+  // against all its children (PacketLanes::lanes_enter) instead of child by child for each
+  // chunk of lanes, the lanes' far ends read from memory (they do not change until a lane
+  // finishes, and a finished lane leaves `bits`).
+  constexpr bool kLaneNodes = kBits && detail::kLaneByLane<Arch>;
+
   detail::PacketLanes<Arch, K> lanes(rays, setup, query);
   B* const tfar = lanes.tfar;
   static_assert(Uniform || !Fused, "the fused slab test picks its planes once per packet");
@@ -60,20 +70,13 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
     negz[c] = lanes.iz[c] < B(0.0f);
   }
 
-  // Any hit: a lane's upper end only falls when the lane finishes, so whether it is active
-  // in a stacked subtree is decided at the push (its entry bits), not re-tested at the pop.
-  constexpr bool kBits = !Query::kNearFirst;
-  // Any hit with one lane per child (AVX2): each node is tested lane by lane against all
-  // its children (PacketLanes::lanes_enter) instead of child by child for each chunk of
-  // lanes, the lanes' far ends read from memory (they do not change until a lane finishes,
-  // and a finished lane leaves `bits`).
-  constexpr bool kLaneNodes = kBits && L == N;
   alignas(64) float lane_far[kLaneNodes ? K : 1];
   if constexpr (kLaneNodes)
     for (int c = 0; c < C; ++c) tfar[c].store_aligned(lane_far + c * L);
   alignas(64) float stack_dist[kBits ? 1 : detail::kWideStack][K];
-  std::uint32_t stack_bits[kBits ? detail::kWideStack : 1];
-  std::uint32_t stack_ref[detail::kWideStack];
+  // (kLaneNodes: room for a whole register's store past the last entry.)
+  std::uint32_t stack_bits[kBits ? detail::kWideStack + N : 1];
+  std::uint32_t stack_ref[detail::kWideStack + N];
   int size = 0;
   std::uint32_t finished = 0;
 
@@ -194,30 +197,41 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           }
           return any;
         };
-        if constexpr (!Query::kNearFirst) {
+        if constexpr (kLaneNodes) {
+          // Any order, AVX2: the entered children (the used ones some lane enters) stored on
+          // the stack in slot order by one compress each for references and lanes, no loop
+          // over the children; then the first taken as next and the last moved into its
+          // place, as below.
+          using I = detail::IntB<Arch>;
+          const I entered =
+              detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup, lane_far, pad);
+          const I refs = I::load_aligned(reinterpret_cast<const std::int32_t*>(node.child));
+          const std::uint32_t taken =
+              detail::bits_from_mask<Arch>(xsimd::bool_cast(entered != I(0)) &
+                                           xsimd::bool_cast(refs != I(static_cast<std::int32_t>(wide_ref::kEmptyRef))));
+          const int base = size;
+          detail::compress_lanes<Arch>(stack_ref + base, refs, taken);
+          size += detail::compress_lanes<Arch>(stack_bits + base, entered, taken);
+          if (size != base) {
+            --size;
+            cur = stack_ref[base];
+            cur_bits = stack_bits[base];
+            stack_ref[base] = stack_ref[size];
+            stack_bits[base] = stack_bits[size];
+            continue;
+          }
+        } else if constexpr (!Query::kNearFirst) {
           // Any order: every entered child pushed in slot order with no branch on whether
           // it is entered (a coin toss to the predictor; perf/rays.md, session 18), then the
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;
-          // On AVX2 the entered lanes of every child at once (lanes_enter), else child by child.
-          alignas(64) std::uint32_t lane_entered[kLaneNodes ? N : 1];
-          if constexpr (kLaneNodes)
-            xsimd::store_aligned(reinterpret_cast<std::int32_t*>(lane_entered),
-                                 detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays,
-                                                                                             setup, lane_far, pad));
           for (int j = 0; j < N; ++j) {
             const std::uint32_t child = node.child[j];
             if (child == wide_ref::kEmptyRef) break;  // used children come first
             std::uint32_t entered;
-            bool any;
-            if constexpr (kLaneNodes) {
-              entered = lane_entered[j];
-              any = entered != 0;
-            } else {
-              B dist[C];
-              any = enter(j, dist, entered);
-            }
+            B dist[C];
+            const bool any = enter(j, dist, entered);
             stack_ref[size] = child;
             stack_bits[size] = entered;
             size += any ? 1 : 0;

@@ -14,6 +14,7 @@
 
 #include "simd/ray_transpose.h"
 #include "simd/stream_scratch.h"
+#include "simd/wide/compress.h"
 #include "simd/wide/queries.h"
 #include "simd/wide/stack.h"
 
@@ -54,28 +55,6 @@ template <class Arch>
     }
     transpose_rows4<Arch>(lo, hi);
     for (int f = 0; f < 4; ++f) out[f] = lo[f], out[4 + f] = hi[f];
-  }
-}
-
-/// Stores the ids of `bits` (lane order) at dst; returns how many.
-template <class Arch>
-[[gnu::always_inline]] inline int compress_ids(std::uint32_t* dst, IntB<Arch> v, std::uint32_t bits) {
-  if constexpr (kLanes<Arch> == 16) {
-    _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(static_cast<__mmask16>(bits), v));
-    return std::popcount(bits);
-  } else if constexpr (kLanes<Arch> == 8) {
-    // vpermd reads the low 3 bits of each index. (data()[]: with _GLIBCXX_ASSERTIONS
-    // std::array's operator[] is an out-of-line weak function, which a per-ISA object must
-    // not define.)
-    const __m256i lanes = _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressLanes8.data()[bits])),
-                                            _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, lanes));
-    return std::popcount(bits);
-  } else {
-    // (data(): see above.)
-    const __m128i control = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kCompressBytes4.data() + 16 * bits));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst), _mm_shuffle_epi8(v, control));
-    return std::popcount(bits);
   }
 }
 
@@ -184,7 +163,7 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
           const M hit = valid & (entry <= exit);
           const std::uint32_t bits = detail::bits_from_mask<Arch>(hit);
           if constexpr (Query::kNearFirst) entry_sum[j] = entry_sum[j] + xsimd::select(hit, entry, B(0.0f));
-          child_count[j] += detail::compress_ids<Arch>(split + j * cap + child_count[j], idx, bits);
+          child_count[j] += detail::compress_lanes<Arch>(split + j * cap + child_count[j], idx, bits);
         }
       }
       // Push order: the child walked first goes last (farthest mean entry first).
