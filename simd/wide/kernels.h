@@ -251,9 +251,11 @@ struct WideKernels {
   static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                      const detail::PacketSetup<K>& setup, Query& query);
   /// The per-lane packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
-  /// Uniform: every valid lane in one octant. Fused: and no zero direction component, on
-  /// AVX-512 (PacketLanes::fused_slabs). Returns the lanes the query finished.
-  template <class Query, bool Uniform, bool Fused, class Leaves>
+  /// Uniform: every valid lane in one octant. NoZero: and no zero direction component,
+  /// where the walk has a use for it: the fused slab test on AVX-512
+  /// (PacketLanes::fused_slabs), the family's shortcut of any-hit node tests on AVX2
+  /// (PacketFamily). Returns the lanes the query finished.
+  template <class Query, bool Uniform, bool NoZero, class Leaves>
   static std::uint32_t trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                     const detail::PacketSetup<K>& setup, Query& query);
 };

@@ -7,6 +7,7 @@
 
 #include "simd/wide/compress.h"
 #include "simd/wide/node_lanes.h"
+#include "simd/wide/packet_family.h"
 #include "simd/wide/packet_lanes.h"
 #include "simd/wide/queries.h"
 #include "simd/wide/stack.h"
@@ -30,10 +31,13 @@ namespace volley::simd {
 // finished stays in the packet's walk, which costs more than the misses (perf/rays.md,
 // session 22).
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
-// for the packet instead of per lane. Fused: no lane has a zero direction component either,
-// and each slab distance is one fused operation (PacketLanes::fused_slabs).
+// for the packet instead of per lane. NoZero: no lane has a zero direction component
+// either: on AVX-512 each slab distance is one fused operation (PacketLanes::fused_slabs);
+// on AVX2 an any-hit walk asks the packet's interval family first at each node that all
+// its running lanes entered, and where the family settles every child (each entered by all
+// the packet's rays or by none) the lanes' own tests are skipped (PacketFamily).
 template <class Arch, TriangleTest Test, bool Robust>
-template <class Query, bool Uniform, bool Fused, class Leaves>
+template <class Query, bool Uniform, bool NoZero, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                             const detail::PacketSetup<K>& setup, Query& query) {
   using B = detail::FloatB<Arch>;
@@ -56,7 +60,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
 
   detail::PacketLanes<Arch, K> lanes(rays, setup, query);
   B* const tfar = lanes.tfar;
-  static_assert(Uniform || !Fused, "the fused slab test picks its planes once per packet");
+  static_assert(Uniform || !NoZero, "no zero direction component: one octant as well");
+  constexpr bool Fused = NoZero && detail::kFusedLanes<Arch>;
   using FusedLanes = typename detail::PacketLanes<Arch, K>::Fused;
   [[maybe_unused]] const FusedLanes fused = lanes.template fuse_if<Fused>(Robust ? core::kSlabExitPad : 1.0f, Robust);
   // Uniform octant: the plane arrays of a valid lane's octant; otherwise each lane's octant.
@@ -73,6 +78,14 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   alignas(64) float lane_far[kLaneNodes ? K : 1];
   if constexpr (kLaneNodes)
     for (int c = 0; c < C; ++c) tfar[c].store_aligned(lane_far + c * L);
+  // The family's shortcut (any hit, AVX2, one octant and no zero component).
+  constexpr bool kFamily = kLaneNodes && NoZero;
+  [[maybe_unused]] detail::PacketFamily<Arch, K> family;
+  [[maybe_unused]] typename detail::Lanes8<Arch>::V family_far;
+  if constexpr (kFamily) {
+    family = detail::PacketFamily<Arch, K>(lanes, valid, Robust ? core::kSlabExitPad : 1.0f);
+    family_far = detail::Lanes8<Arch>::set1(lanes.far_max());
+  }
   alignas(64) float stack_dist[kBits ? 1 : detail::kWideStack][K];
   // (kLaneNodes: room for a whole register's store past the last entry.)
   std::uint32_t stack_bits[kBits ? detail::kWideStack + N : 1];
@@ -203,8 +216,27 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           // over the children; then the first taken as next and the last moved into its
           // place, as below.
           using I = detail::IntB<Arch>;
-          const I entered =
-              detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup, lane_far, pad);
+          I entered;
+          bool settled = false;
+          if constexpr (kFamily) {
+            if (bits == (valid & ~finished)) {
+              // The family first where every running lane entered the node (below a node
+              // that some lane missed, the family, which holds that lane, cannot say that all
+              // its rays enter a child): children no ray of it may enter, children all its
+              // rays enter; if that is every child, the lanes' own tests are not needed.
+              typename detail::Lanes8<Arch>::V entry;
+              const std::uint32_t maybe = family.maybe(node, family_far, entry);
+              const std::uint32_t all = family.all(node) & maybe;
+              if (maybe == all) {
+                entered = xsimd::select(xsimd::bool_cast(detail::mask_from_bits<Arch>(all)),
+                                        I(static_cast<std::int32_t>(bits)), I(0));
+                settled = true;
+              }
+            }
+          }
+          if (!settled)
+            entered =
+                detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup, lane_far, pad);
           const I refs = I::load_aligned(reinterpret_cast<const std::int32_t*>(node.child));
           const std::uint32_t taken =
               detail::bits_from_mask<Arch>(xsimd::bool_cast(entered != I(0)) &

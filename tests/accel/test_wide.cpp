@@ -201,6 +201,60 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   }
 }
 
+TEST_CASE("wide: coherent shadow packets through triangle vertices answer as brute force (the family's shortcut)") {
+  // Shadow packets as a point light makes them, one octant and nearly parallel: 16 origins
+  // on the line from a light through a triangle's vertex, beyond the vertex, some nudged off
+  // it, each segment ending at the light. On AVX2 the any-hit walk asks such a packet's
+  // interval family first and skips the lanes' own node tests where it settles every child;
+  // the segments graze leaf boxes at the vertices (one triangle per leaf), where only the
+  // padded tests keep every hit. Unpadded (Robust = false) the packets must miss some, which
+  // shows this test can fail.
+  const VertexAimed case_ = lone_triangles_vertex_aimed();
+  const Soup& soup = case_.soup;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), beyond(0.02f, 0.3f);
+  std::vector<Ray> rays;
+  for (std::size_t t = 0; t < soup.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 target = soup.vertex(t, k);
+      const glm::vec3 light = target + 20.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
+      for (int i = 0; i < 16; ++i) {
+        glm::vec3 o = target + (target - light) * beyond(rng);
+        if (i % 4 == 3) o += 0.01f * glm::vec3(unit(rng), unit(rng), unit(rng));
+        rays.push_back(make_ray(o, light - o, 0.0f, 1.0f));
+      }
+    }
+  const auto boxes = soup.boxes();
+  volley::core::BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  const volley::core::Bvh bvh = volley::core::build_bvh(boxes, one_per_leaf);
+  std::vector<std::uint32_t> ids(soup.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
+  std::size_t unpadded_wrong = 0;  // over the ISAs: on some one alone rounding may not show it
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    const std::vector<Hit> want = brute_force_all(soup, TriangleTest::watertight, rays, isa);
+    const auto blocked = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
+    CHECK(blocked > static_cast<long>(rays.size() / 4));
+    std::size_t wrong[2] = {0, 0};
+    for (bool robust : {true, false}) {
+      const auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
+      wide->build(bvh, soup.xyz.data(), ids.data());
+      volley::RayPacket<16> p;
+      for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+        volley::load(p, rays.data() + first, 16);
+        const std::uint32_t got = wide->occluded(p);
+        for (int i = 0; i < 16; ++i) wrong[robust] += ((got >> i) & 1u) != (want[first + i].hit() ? 1u : 0u);
+      }
+    }
+    MESSAGE(std::string(volley::to_string(isa)), ": ", rays.size(), " shadow rays through vertices, ", blocked,
+            " blocked; packets wrong on ", wrong[0], " unpadded, ", wrong[1], " padded");
+    CHECK(wrong[1] == 0);
+    unpadded_wrong += wrong[0];
+  }
+  CHECK(unpadded_wrong > 0);
+}
+
 TEST_CASE("wide: occlusion packets with deferred hand-offs answer as brute force (every ISA and test)") {
   // Trees past kDeferHandoffBytes walk the lanes left to single rays after the packet's own
   // walk; a small soup with the deferral turned on takes that path on every packet that
