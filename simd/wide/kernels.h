@@ -253,7 +253,7 @@ struct WideKernels {
   /// The per-lane packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
   /// Uniform: every valid lane in one octant. NoZero: and no zero direction component,
   /// where the walk has a use for it: the fused slab test on AVX-512
-  /// (PacketLanes::fused_slabs), the family's shortcut of any-hit node tests on AVX2
+  /// (PacketLanes::fused_slabs), the family's shortcut of any-hit node tests
   /// (PacketFamily). Returns the lanes the query finished.
   template <class Query, bool Uniform, bool NoZero, class Leaves>
   static std::uint32_t trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,

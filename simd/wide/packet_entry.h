@@ -25,7 +25,7 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
                        (setup.walk == detail::PacketWalk::spread_frustum && detail::spread_frustum<Query>());
   if (frustum && !(bvh.root & wide_ref::kLeafBit)) return trace_frustum(bvh, prep, setup, query);
   if (setup.walk == detail::PacketWalk::mixed_octants) return trace_packet<Query, false, false>(bvh, prep, setup, query);
-  if constexpr (detail::kFusedLanes<Arch> || (detail::kLaneByLane<Arch> && !Query::kNearFirst))
+  if constexpr (detail::kFusedLanes<Arch> || !Query::kNearFirst)
     if (setup.walk != detail::PacketWalk::one_octant) return trace_packet<Query, true, true>(bvh, prep, setup, query);
   return trace_packet<Query, true, false>(bvh, prep, setup, query);
 }

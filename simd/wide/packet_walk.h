@@ -33,9 +33,9 @@ namespace volley::simd {
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane. NoZero: no lane has a zero direction component
 // either: on AVX-512 each slab distance is one fused operation (PacketLanes::fused_slabs);
-// on AVX2 an any-hit walk asks the packet's interval family first at each node that all
-// its running lanes entered, and where the family settles every child (each entered by all
-// the packet's rays or by none) the lanes' own tests are skipped (PacketFamily).
+// an any-hit walk asks the packet's interval family first at each node that all its
+// running lanes entered, and where the family settles every child (each entered by all the
+// packet's rays or by none) the lanes' own tests are skipped (PacketFamily).
 template <class Arch, TriangleTest Test, bool Robust>
 template <class Query, bool Uniform, bool NoZero, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
@@ -78,8 +78,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
   alignas(64) float lane_far[kLaneNodes ? K : 1];
   if constexpr (kLaneNodes)
     for (int c = 0; c < C; ++c) tfar[c].store_aligned(lane_far + c * L);
-  // The family's shortcut (any hit, AVX2, one octant and no zero component).
-  constexpr bool kFamily = kLaneNodes && NoZero;
+  // The family's shortcut (any hit, one octant and no zero component).
+  constexpr bool kFamily = kBits && NoZero;
   [[maybe_unused]] detail::PacketFamily<Arch, K> family;
   [[maybe_unused]] typename detail::Lanes8<Arch>::V family_far;
   if constexpr (kFamily) {
@@ -173,6 +173,22 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
       if (!(cur & wide_ref::kLeafBit)) {
         // Interior: each child against the active lanes.
         const WideNode<N>& node = wide_ref::node_at(bvh.nodes, cur);
+        // The family first (any hit, no zero component), where every running lane entered
+        // the node (below a node some lane missed, the family, which holds that lane, cannot
+        // say that all its rays enter a child): true when every child is settled, `all` then
+        // the children every ray of the family enters (the others none may enter), so the
+        // lanes' own tests are not needed.
+        const auto family_settles = [&](const WideNode<N>& at, std::uint32_t& all) {
+          if constexpr (kFamily) {
+            if (bits != (valid & ~finished)) return false;
+            typename detail::Lanes8<Arch>::V entry;
+            const std::uint32_t maybe = family.maybe(at, family_far, entry);
+            all = family.all(at) & maybe;
+            return maybe == all;
+          } else {
+            return false;
+          }
+        };
         // Child j's entry distance per lane (NaN where a lane does not enter it); whether
         // some lane enters it.
         const auto enter = [&](int j, B* dist, std::uint32_t& entered) {
@@ -217,24 +233,10 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           // place, as below.
           using I = detail::IntB<Arch>;
           I entered;
-          bool settled = false;
-          if constexpr (kFamily) {
-            if (bits == (valid & ~finished)) {
-              // The family first where every running lane entered the node (below a node
-              // that some lane missed, the family, which holds that lane, cannot say that all
-              // its rays enter a child): children no ray of it may enter, children all its
-              // rays enter; if that is every child, the lanes' own tests are not needed.
-              typename detail::Lanes8<Arch>::V entry;
-              const std::uint32_t maybe = family.maybe(node, family_far, entry);
-              const std::uint32_t all = family.all(node) & maybe;
-              if (maybe == all) {
-                entered = xsimd::select(xsimd::bool_cast(detail::mask_from_bits<Arch>(all)),
-                                        I(static_cast<std::int32_t>(bits)), I(0));
-                settled = true;
-              }
-            }
-          }
-          if (!settled)
+          if (std::uint32_t all; family_settles(node, all))
+            entered = xsimd::select(xsimd::bool_cast(detail::mask_from_bits<Arch>(all)),
+                                    I(static_cast<std::int32_t>(bits)), I(0));
+          else
             entered =
                 detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup, lane_far, pad);
           const I refs = I::load_aligned(reinterpret_cast<const std::int32_t*>(node.child));
@@ -258,15 +260,25 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;
-          for (int j = 0; j < N; ++j) {
-            const std::uint32_t child = node.child[j];
-            if (child == wide_ref::kEmptyRef) break;  // used children come first
-            std::uint32_t entered;
-            B dist[C];
-            const bool any = enter(j, dist, entered);
-            stack_ref[size] = child;
-            stack_bits[size] = entered;
-            size += any ? 1 : 0;
+          if (std::uint32_t all; family_settles(node, all)) {
+            for (int j = 0; j < N; ++j) {
+              const std::uint32_t child = node.child[j];
+              if (child == wide_ref::kEmptyRef) break;  // used children come first
+              stack_ref[size] = child;
+              stack_bits[size] = bits;
+              size += (all >> j) & 1u;
+            }
+          } else {
+            for (int j = 0; j < N; ++j) {
+              const std::uint32_t child = node.child[j];
+              if (child == wide_ref::kEmptyRef) break;  // used children come first
+              std::uint32_t entered;
+              B dist[C];
+              const bool any = enter(j, dist, entered);
+              stack_ref[size] = child;
+              stack_bits[size] = entered;
+              size += any ? 1 : 0;
+            }
           }
           if (size != base) {
             --size;
