@@ -178,12 +178,12 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
         // say that all its rays enter a child): true when every child is settled, `all` then
         // the children every ray of the family enters (the others none may enter), so the
         // lanes' own tests are not needed.
-        const auto family_settles = [&](const WideNode<N>& at, std::uint32_t& all) {
+        const auto family_settles = [&](std::uint32_t& all) {
           if constexpr (kFamily) {
             if (bits != (valid & ~finished)) return false;
             typename detail::Lanes8<Arch>::V entry;
-            const std::uint32_t maybe = family.maybe(at, family_far, entry);
-            all = family.all(at) & maybe;
+            const std::uint32_t maybe = family.maybe(node, family_far, entry);
+            all = family.all(node) & maybe;
             return maybe == all;
           } else {
             return false;
@@ -226,41 +226,30 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leave
           }
           return any;
         };
-        if constexpr (kLaneNodes) {
-          // Any order, AVX2: the entered children (the used ones some lane enters) stored on
-          // the stack in slot order by one compress each for references and lanes, no loop
-          // over the children; then the first taken as next and the last moved into its
-          // place, as below.
-          using I = detail::IntB<Arch>;
-          I entered;
-          if (std::uint32_t all; family_settles(node, all))
-            entered = xsimd::select(xsimd::bool_cast(detail::mask_from_bits<Arch>(all)),
-                                    I(static_cast<std::int32_t>(bits)), I(0));
-          else
-            entered =
-                detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup, lane_far, pad);
-          const I refs = I::load_aligned(reinterpret_cast<const std::int32_t*>(node.child));
-          const std::uint32_t taken =
-              detail::bits_from_mask<Arch>(xsimd::bool_cast(entered != I(0)) &
-                                           xsimd::bool_cast(refs != I(static_cast<std::int32_t>(wide_ref::kEmptyRef))));
-          const int base = size;
-          detail::compress_lanes<Arch>(stack_ref + base, refs, taken);
-          size += detail::compress_lanes<Arch>(stack_bits + base, entered, taken);
-          if (size != base) {
-            --size;
-            cur = stack_ref[base];
-            cur_bits = stack_bits[base];
-            stack_ref[base] = stack_ref[size];
-            stack_bits[base] = stack_bits[size];
-            continue;
-          }
-        } else if constexpr (!Query::kNearFirst) {
+        if constexpr (kBits) {
           // Any order: every entered child pushed in slot order with no branch on whether
           // it is entered (a coin toss to the predictor; perf/rays.md, session 18), then the
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;
-          if (std::uint32_t all; family_settles(node, all)) {
+          if constexpr (kLaneNodes) {
+            // AVX2: the entered children (the used ones some lane enters) stored by one
+            // compress each for references and lanes, no loop over the children.
+            using I = detail::IntB<Arch>;
+            I entered;
+            if (std::uint32_t all; family_settles(all))
+              entered = xsimd::select(xsimd::bool_cast(detail::mask_from_bits<Arch>(all)),
+                                      I(static_cast<std::int32_t>(bits)), I(0));
+            else
+              entered = detail::PacketLanes<Arch, K>::template lanes_enter<Uniform>(node, np, bits, rays, setup,
+                                                                                      lane_far, pad);
+            const I refs = I::load_aligned(reinterpret_cast<const std::int32_t*>(node.child));
+            const std::uint32_t taken = detail::bits_from_mask<Arch>(
+                xsimd::bool_cast(entered != I(0)) &
+                xsimd::bool_cast(refs != I(static_cast<std::int32_t>(wide_ref::kEmptyRef))));
+            detail::compress_lanes<Arch>(stack_ref + base, refs, taken);
+            size += detail::compress_lanes<Arch>(stack_bits + base, entered, taken);
+          } else if (std::uint32_t all; family_settles(all)) {
             for (int j = 0; j < N; ++j) {
               const std::uint32_t child = node.child[j];
               if (child == wide_ref::kEmptyRef) break;  // used children come first
