@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -156,6 +157,23 @@ TEST_CASE("wide: flat axis-aligned geometry, origins on slab planes, zero direct
   }
 }
 
+namespace {
+
+/// The wide engine (watertight test) over `soup` with one triangle per leaf, so that every
+/// leaf box is a triangle's own.
+std::unique_ptr<volley::accel::WideAccel> one_triangle_per_leaf(const Soup& soup, Isa isa, bool robust) {
+  volley::core::BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  const volley::core::Bvh bvh = volley::core::build_bvh(soup.boxes(), one_per_leaf);
+  std::vector<std::uint32_t> ids(soup.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
+  auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
+  wide->build(bvh, soup.xyz.data(), ids.data());
+  return wide;
+}
+
+}  // namespace
+
 TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab padding (mutation check)") {
   // Lone triangles, one per leaf, and rays from all around aimed exactly at their vertices:
   // many rays only touch a leaf box at a corner or an edge, where entry = exit in exact
@@ -165,19 +183,12 @@ TEST_CASE("wide: rays touching leaf boxes at triangle vertices need the slab pad
   const VertexAimed case_ = lone_triangles_vertex_aimed();
   const Soup& soup = case_.soup;
   const std::vector<Ray>& rays = case_.rays;
-  const auto boxes = soup.boxes();
-  volley::core::BvhBuildOptions one_per_leaf;
-  one_per_leaf.max_leaf_size = 1;
-  const volley::core::Bvh bvh = volley::core::build_bvh(boxes, one_per_leaf);
-  std::vector<std::uint32_t> ids(soup.size());
-  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
   for (Isa isa : simd_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     const std::vector<Hit> want = brute_force_all(soup, TriangleTest::watertight, rays, isa);
     std::size_t missed[2] = {0, 0}, packet_missed[2] = {0, 0};
     for (bool robust : {true, false}) {
-      const auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
-      wide->build(bvh, soup.xyz.data(), ids.data());
+      const auto wide = one_triangle_per_leaf(soup, isa, robust);
       for (std::size_t i = 0; i < rays.size(); ++i) {
         Hit h;
         wide->intersect(rays[i], h);
@@ -224,12 +235,6 @@ TEST_CASE("wide: coherent shadow packets through triangle vertices answer as bru
         rays.push_back(make_ray(o, light - o, 0.0f, 1.0f));
       }
     }
-  const auto boxes = soup.boxes();
-  volley::core::BvhBuildOptions one_per_leaf;
-  one_per_leaf.max_leaf_size = 1;
-  const volley::core::Bvh bvh = volley::core::build_bvh(boxes, one_per_leaf);
-  std::vector<std::uint32_t> ids(soup.size());
-  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
   std::size_t unpadded_wrong = 0;  // over the ISAs: on some one alone rounding may not show it
   for (Isa isa : simd_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
@@ -238,8 +243,7 @@ TEST_CASE("wide: coherent shadow packets through triangle vertices answer as bru
     CHECK(blocked > static_cast<long>(rays.size() / 4));
     std::size_t wrong[2] = {0, 0};
     for (bool robust : {true, false}) {
-      const auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
-      wide->build(bvh, soup.xyz.data(), ids.data());
+      const auto wide = one_triangle_per_leaf(soup, isa, robust);
       volley::RayPacket<16> p;
       for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
         volley::load(p, rays.data() + first, 16);
