@@ -12,6 +12,56 @@
 
 namespace volley::simd {
 
+namespace detail {
+
+/// The nearest hit of kLanes<Arch> ray lanes over triangles broadcast one at a time, in
+/// block order (the closest-hit packet kernel's loop; the stream walk's leaf lists too).
+/// Hits only shrink `upper`; a lane's winner keeps u, v (det-scaled tests: u det, v det
+/// and det, divided by finish()) and prim. `any`: the lanes some triangle hit.
+template <class Arch, class T>
+struct NearestLanes {
+  using B = FloatB<Arch>;
+  using M = MaskB<Arch>;
+  static constexpr bool kScaled = kDetScaled<T>;
+  B upper, u, v, den = B(1.0f), prim;  // (not den{1.0f}: xsimd takes braces as a list of lanes)
+  M any = M(false);
+
+  [[gnu::always_inline]] NearestLanes(B upper_, B u_, B v_, B prim_) : upper(upper_), u(u_), v(v_), prim(prim_) {}
+
+  template <class Block>
+  [[gnu::always_inline]] void triangle(const typename T::Rays& r, const Block& block, int j) {
+    const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+    if (xsimd::none(cand.valid)) return;
+    const B t = cand_t<T>(cand);
+    const M hit = confirmed<T>(r, cand, t, upper);
+    upper = xsimd::select(hit, t, upper);
+    u = xsimd::select(hit, cand.u, u);
+    v = xsimd::select(hit, cand.v, v);
+    if constexpr (kScaled) den = xsimd::select(hit, cand.den, den);
+    prim = xsimd::select(hit, broadcast_id<Arch>(block.prim[j]), prim);
+    any = any | hit;
+  }
+  /// blocks[0 .. count), the last one's first `last` triangles only: whole blocks with a
+  /// fixed trip count, then the last cut short (one loop with a variable bound ran 2% more
+  /// instructions on whole blocks: perf/rays.md).
+  template <class Block>
+  [[gnu::always_inline]] void blocks(const typename T::Rays& r, const Block* blocks, std::uint32_t count,
+                                     int last) {
+    constexpr int W = static_cast<int>(std::extent_v<decltype(Block::prim)>);
+    const std::uint32_t whole = last < W && count != 0 ? count - 1 : count;
+    for (std::uint32_t b = 0; b < whole; ++b)
+      for (int j = 0; j < W; ++j) triangle(r, blocks[b], j);
+    if (whole != count)
+      for (int j = 0; j < last; ++j) triangle(r, blocks[whole], j);
+  }
+  /// u and v of the winners (lanes without a hit keep theirs: divided by 1).
+  [[gnu::always_inline]] void finish() {
+    if constexpr (kScaled) u = u / den, v = v / den;
+  }
+};
+
+}  // namespace detail
+
 /// A packet of K rays (K a multiple of kLanes<Arch>) against triangles in blocks of BW
 /// (the lane count, except on AVX-512, whose wide BVH stores blocks of 8: SingleRayArch).
 /// The packet is prepared once (prepare) and then reused for every call. Only lanes whose
@@ -96,49 +146,23 @@ void PacketKernels<Arch, Test, K, BW>::intersect(const PreparedPacket<K>& prepar
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   static_assert(B::size == L, "kLanes<Arch> must be the float lane count");
-  constexpr bool kScaled = detail::kDetScaled<T>;
   const RayPacket<K>& rays = prepared.rays;
   for (int c = 0; c < K; c += L) {
     const std::uint32_t act_bits = (rays.active >> c) & ((2u << (L - 1)) - 1u);
     if (act_bits == 0) continue;
     const M act = detail::mask_from_bits<Arch>(act_bits);
-    const auto r = T::template load<K>(prepared, c);
     // Inactive lanes search [tmin, -inf): never hit.
-    B upper = xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
-                            B(-std::numeric_limits<float>::infinity()));
-    // u, v of each lane's winner (det-scaled tests: u det, v det and |det|, divided at the end).
-    B hu = B::load_aligned(hits.u + c), hv = B::load_aligned(hits.v + c), hden(1.0f);
-    B hp = detail::load_ids<Arch>(hits.prim + c);
-    M any_hit(false);
-    // Triangles in block order, each broadcast to all lanes; hits only shrink upper.
-    const auto triangle = [&](const Block& block, int j) __attribute__((always_inline)) {
-      const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-      if (xsimd::none(cand.valid)) return;
-      const B t = detail::cand_t<T>(cand);
-      const M hit = detail::confirmed<T>(r, cand, t, upper);
-      upper = xsimd::select(hit, t, upper);
-      hu = xsimd::select(hit, cand.u, hu);
-      hv = xsimd::select(hit, cand.v, hv);
-      if constexpr (kScaled) hden = xsimd::select(hit, cand.den, hden);
-      hp = xsimd::select(hit, detail::broadcast_id<Arch>(block.prim[j]), hp);
-      any_hit = any_hit | hit;
-    };
-    // Whole blocks with a fixed trip count, then a last block cut short at `last` (one loop
-    // with a variable bound ran 2% more instructions on whole blocks: perf/rays.md).
-    const std::uint32_t whole = last < W && count != 0 ? count - 1 : count;
-    for (std::uint32_t b = 0; b < whole; ++b)
-      for (int j = 0; j < W; ++j) triangle(blocks[b], j);
-    if (whole != count)
-      for (int j = 0; j < last; ++j) triangle(blocks[whole], j);
-    if (xsimd::none(any_hit)) continue;
-    xsimd::select(any_hit, upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
-    if constexpr (kScaled) {
-      // Lanes without a hit keep their stored u, v (divided by 1: unchanged).
-      hu = hu / hden, hv = hv / hden;
-    }
-    hu.store_aligned(hits.u + c);
-    hv.store_aligned(hits.v + c);
-    hp.store_aligned(reinterpret_cast<float*>(hits.prim + c));
+    detail::NearestLanes<Arch, T> near(
+        xsimd::select(act, detail::upper_bound(B::load_aligned(hits.t + c), B::load_aligned(rays.tmax + c)),
+                      B(-std::numeric_limits<float>::infinity())),
+        B::load_aligned(hits.u + c), B::load_aligned(hits.v + c), detail::load_ids<Arch>(hits.prim + c));
+    near.blocks(T::template load<K>(prepared, c), blocks, count, last);
+    if (xsimd::none(near.any)) continue;
+    xsimd::select(near.any, near.upper, B::load_aligned(hits.t + c)).store_aligned(hits.t + c);
+    near.finish();
+    near.u.store_aligned(hits.u + c);
+    near.v.store_aligned(hits.v + c);
+    near.prim.store_aligned(reinterpret_cast<float*>(hits.prim + c));
   }
 }
 

@@ -92,7 +92,13 @@ struct WatertightTest {
   static void prepare(const RayPacket<K>& rays, PreparedPacket<K>& out);
   template <int K>
   [[gnu::always_inline]] inline static Rays load(const PreparedPacket<K>& p, int offset);
+  /// Ray lanes from their origins, tmin and shear, the axes `uk` shared by every lane...
+  [[gnu::always_inline]] inline static Rays lanes(const B o[3], B tmin, const B s[3], const std::int32_t uk[3]);
+  /// ... or per lane (kx, ky, kz), as load() builds them from a prepared packet.
+  [[gnu::always_inline]] inline static Rays lanes(const B o[3], B tmin, const B s[3], const IntB<Arch> k[3]);
   [[gnu::always_inline]] inline static Tris load_block(const Block& b, const Rays& r);
+  /// What both lanes() forms share.
+  [[gnu::always_inline]] inline static Rays lanes(const B o[3], B tmin, const B s[3]);
   /// Triangle j of a block of any width BW (packets of 16 lanes read blocks of 8 on AVX-512).
   template <int BW>
   [[gnu::always_inline]] inline static Tris broadcast_tri(const WatertightBlock<BW>& b, int j, const Rays& r);

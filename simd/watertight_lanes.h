@@ -89,36 +89,56 @@ template <class Arch, bool Crossing>
 template <int K>
 auto WatertightTest<Arch, Crossing>::load(const PreparedPacket<K>& p, int offset) -> Rays {
   using I = IntB<Arch>;
+  const B o[3] = {B::load_aligned(p.rays.ox + offset), B::load_aligned(p.rays.oy + offset),
+                  B::load_aligned(p.rays.oz + offset)};
+  const B s[3] = {B::load_aligned(p.s[0] + offset), B::load_aligned(p.s[1] + offset),
+                  B::load_aligned(p.s[2] + offset)};
+  const B tmin = B::load_aligned(p.rays.tmin + offset);
+  if (p.uniform != 0) return lanes(o, tmin, s, p.uk);
+  const I k[3] = {I::load_aligned(p.k[0] + offset), I::load_aligned(p.k[1] + offset),
+                  I::load_aligned(p.k[2] + offset)};
+  return lanes(o, tmin, s, k);
+}
+
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::lanes(const B o[3], B tmin, const B s[3]) -> Rays {
   Rays out;
-  out.o[0] = B::load_aligned(p.rays.ox + offset);
-  out.o[1] = B::load_aligned(p.rays.oy + offset);
-  out.o[2] = B::load_aligned(p.rays.oz + offset);
-  out.tmin = B::load_aligned(p.rays.tmin + offset);
-  out.sx = B::load_aligned(p.s[0] + offset);
-  out.sy = B::load_aligned(p.s[1] + offset);
-  out.sz = B::load_aligned(p.s[2] + offset);
+  for (int a = 0; a < 3; ++a) out.o[a] = o[a];
+  out.tmin = tmin;
+  out.sx = s[0];
+  out.sy = s[1];
+  out.sz = s[2];
   out.tmin_lo =
       xsimd::select(xsimd::abs(out.sz) > B(0.0f), out.tmin - xsimd::abs(out.tmin) * B(core::kScaledPad<float>),
                     B(std::numeric_limits<float>::quiet_NaN()));
-  out.uniform = p.uniform != 0;
-  if (out.uniform) {
-    out.kx = p.uk[0];
-    out.ky = p.uk[1];
-    out.kz = p.uk[2];
-    out.okx = out.o[out.kx];
-    out.oky = out.o[out.ky];
-    out.okz = out.o[out.kz];
-  } else {
-    const I kx = I::load_aligned(p.k[0] + offset), ky = I::load_aligned(p.k[1] + offset),
-            kz = I::load_aligned(p.k[2] + offset);
-    out.x0 = xsimd::bool_cast(kx == I(0)), out.x1 = xsimd::bool_cast(kx == I(1));
-    out.y0 = xsimd::bool_cast(ky == I(0)), out.y1 = xsimd::bool_cast(ky == I(1));
-    out.z0 = xsimd::bool_cast(kz == I(0)), out.z1 = xsimd::bool_cast(kz == I(1));
-    out.ikx = kx, out.iky = ky, out.ikz = kz;
-    out.okx = xsimd::select(out.x0, out.o[0], xsimd::select(out.x1, out.o[1], out.o[2]));
-    out.oky = xsimd::select(out.y0, out.o[0], xsimd::select(out.y1, out.o[1], out.o[2]));
-    out.okz = xsimd::select(out.z0, out.o[0], xsimd::select(out.z1, out.o[1], out.o[2]));
-  }
+  return out;
+}
+
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::lanes(const B o[3], B tmin, const B s[3], const std::int32_t uk[3]) -> Rays {
+  Rays out = lanes(o, tmin, s);
+  out.uniform = true;
+  out.kx = uk[0];
+  out.ky = uk[1];
+  out.kz = uk[2];
+  out.okx = out.o[out.kx];
+  out.oky = out.o[out.ky];
+  out.okz = out.o[out.kz];
+  return out;
+}
+
+template <class Arch, bool Crossing>
+auto WatertightTest<Arch, Crossing>::lanes(const B o[3], B tmin, const B s[3], const IntB<Arch> k[3]) -> Rays {
+  using I = IntB<Arch>;
+  Rays out = lanes(o, tmin, s);
+  out.uniform = false;
+  out.x0 = xsimd::bool_cast(k[0] == I(0)), out.x1 = xsimd::bool_cast(k[0] == I(1));
+  out.y0 = xsimd::bool_cast(k[1] == I(0)), out.y1 = xsimd::bool_cast(k[1] == I(1));
+  out.z0 = xsimd::bool_cast(k[2] == I(0)), out.z1 = xsimd::bool_cast(k[2] == I(1));
+  out.ikx = k[0], out.iky = k[1], out.ikz = k[2];
+  out.okx = xsimd::select(out.x0, out.o[0], xsimd::select(out.x1, out.o[1], out.o[2]));
+  out.oky = xsimd::select(out.y0, out.o[0], xsimd::select(out.y1, out.o[1], out.o[2]));
+  out.okz = xsimd::select(out.z0, out.o[0], xsimd::select(out.z1, out.o[1], out.o[2]));
   return out;
 }
 

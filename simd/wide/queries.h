@@ -70,6 +70,16 @@ constexpr bool lanes_on_pop() {
     return true;
 }
 
+/// Whether the stream walk may test a long leaf list L rays at a time in lanes
+/// (q.leaf_lanes, ClosestHitStream's), instead of ray by ray by the single query's leaf.
+template <class Query>
+constexpr bool leaf_lanes() {
+  if constexpr (requires { Query::kLeafLanes; })
+    return Query::kLeafLanes;
+  else
+    return false;
+}
+
 /// What a single-ray query's leaf action tells the walk.
 enum class LeafStep {
   go_on,     ///< nothing changed
@@ -394,13 +404,39 @@ struct AnyHitStream {
 template <class Kernels>
 struct ClosestHitStream {
   using Single = ClosestHitRay<Kernels>;
+  using B = typename Kernels::Float;
   static constexpr bool kNearFirst = true;
+  static constexpr bool kLeafLanes = true;
   Hit* hits;
 
   float bound(std::size_t i, const Ray& ray) const { return hits[i].t < ray.tmax ? hits[i].t : ray.tmax; }
   Single single(std::uint32_t i) const { return Single{hits[i]}; }
   void done(std::uint32_t i, const Single& q, float& far) {
     if (q.answer()) far = hits[i].t;
+  }
+  /// A leaf for the rays ids[0 .. L) in lanes `r` at once, the triangles broadcast (the
+  /// stream walk's long leaf lists; the closest-hit packet kernel's loop): lanes searching
+  /// [tmin, upper), the last block's first `last` triangles only. Each hit lane's ray gets
+  /// its nearest hit, and its upper end `far(i)` falls to it.
+  template <class T, class Far>
+  [[gnu::always_inline]] void leaf_lanes(const typename T::Rays& r, B upper, const std::uint32_t* ids,
+                                         const typename Kernels::Block* blocks, std::uint32_t count, int last,
+                                         Far&& far) {
+    NearestLanes<typename Kernels::Isa, T> near(upper, B(0.0f), B(0.0f), B(0.0f));
+    near.blocks(r, blocks, count, last);
+    std::uint32_t bits = bits_from_mask<typename Kernels::Isa>(near.any);
+    if (bits == 0) return;
+    near.finish();
+    alignas(64) float t[Kernels::L], u[Kernels::L], v[Kernels::L];
+    alignas(64) std::uint32_t prim[Kernels::L];
+    near.upper.store_aligned(t), near.u.store_aligned(u), near.v.store_aligned(v);
+    near.prim.store_aligned(reinterpret_cast<float*>(prim));
+    for (; bits != 0; bits &= bits - 1) {
+      const int l = std::countr_zero(bits);
+      Hit& hit = hits[ids[l]];
+      hit.t = t[l], hit.u = u[l], hit.v = v[l], hit.prim = prim[l];
+      far(ids[l]) = t[l];
+    }
   }
 };
 
