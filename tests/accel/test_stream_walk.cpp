@@ -53,6 +53,25 @@ Built build(const Soup& soup, volley::core::BvhBuildOptions options = {}) {
   return b;
 }
 
+/// hits[i].t on entry bounds the search: a bound at the wanted hit finds nothing nearer
+/// (the entry stays as it was), a bound beyond it finds the wanted hit. The wrong answers.
+std::size_t wrong_with_bounds(const volley::accel::WideAccel& wide, const std::vector<Ray>& rays,
+                              const std::vector<Hit>& want) {
+  std::vector<Hit> bounded(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    bounded[i].prim = 0xdeadbeefu;
+    bounded[i].t = want[i].hit() ? (i % 2 ? want[i].t : want[i].t * 1.5f + 1.0f) : 1e30f;
+  }
+  wide.intersect(rays.data(), rays.size(), bounded.data());
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const bool at_hit = want[i].hit() && i % 2;
+    wrong += at_hit ? bounded[i].prim != 0xdeadbeefu
+                    : (want[i].hit() ? !agree(bounded[i], want[i]) : bounded[i].prim != 0xdeadbeefu);
+  }
+  return wrong;
+}
+
 }  // namespace
 
 TEST_CASE("stream walk: the kernels' stream forms equal brute force on every ISA and test") {
@@ -85,21 +104,7 @@ TEST_CASE("stream walk: the kernels' stream forms equal brute force on every ISA
       CHECK(wrong == 0);
       CHECK(wrong_blocked == 0);
 
-      // hits[i].t on entry bounds the search: a bound at the wanted hit finds nothing nearer
-      // (the entry stays as it was), a bound beyond it finds the wanted hit.
-      std::vector<Hit> bounded(rays.size());
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        bounded[i].prim = 0xdeadbeefu;
-        bounded[i].t = want[i].hit() ? (i % 2 ? want[i].t : want[i].t * 1.5f + 1.0f) : 1e30f;
-      }
-      wide->intersect(rays.data(), rays.size(), bounded.data());
-      std::size_t wrong_bounded = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        const bool at_hit = want[i].hit() && i % 2;
-        wrong_bounded += at_hit ? bounded[i].prim != 0xdeadbeefu : !(want[i].hit() ? agree(bounded[i], want[i])
-                                                                                   : bounded[i].prim == 0xdeadbeefu);
-      }
-      CHECK(wrong_bounded == 0);
+CHECK(wrong_with_bounds(*wide, rays, want) == 0);
 
       // Short streams and odd lengths (below a group of lanes, one ray, none).
       for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{15}, std::size_t{17}, std::size_t{300}}) {
@@ -237,20 +242,7 @@ TEST_CASE("stream walk: long leaf lists tested in lanes give the single ray's hi
       std::size_t disagree = 0;
       for (std::size_t i = 0; i < rays.size(); ++i) disagree += !agree(hits[i], oracle[i]);
       CHECK(disagree == 0);
-      // A bound on entry: beyond the hit it is found again; at it nothing nearer is.
-      std::vector<Hit> bounded(rays.size());
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        bounded[i].prim = 0xdeadbeefu;
-        bounded[i].t = want[i].hit() ? (i % 2 ? want[i].t : want[i].t * 1.5f + 1.0f) : 1e30f;
-      }
-      wide->intersect(rays.data(), rays.size(), bounded.data());
-      std::size_t wrong_bounded = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        const bool at_hit = want[i].hit() && i % 2;
-        wrong_bounded += at_hit ? bounded[i].prim != 0xdeadbeefu
-                                : (want[i].hit() ? !agree(bounded[i], want[i]) : bounded[i].prim != 0xdeadbeefu);
-      }
-      CHECK(wrong_bounded == 0);
+CHECK(wrong_with_bounds(*wide, rays, want) == 0);  // bounds on entry
     }
   }
 }
