@@ -123,31 +123,32 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
         const Block* first = bvh.blocks + wide_ref::leaf_first(cur.ref);
         std::uint32_t k = 0;
         if constexpr (detail::leaf_lanes<Query>() && Test == TriangleTest::watertight) {
-          // A long list: L rays at a time in lanes, each triangle broadcast to them.
-          using T = detail::TestOf<Arch, Test>;
-          static_assert(offsetof(PreparedRay, k) == 8 * sizeof(float) && offsetof(PreparedRay, s) == 11 * sizeof(float));
-          const int last = cur.count >= kStreamLeafList ? detail::last_block_triangles<WideKernels>(first, blocks) : 0;
-          for (; cur.count >= kStreamLeafList && k + kStreamLeafLanes <= cur.count; k += L) {
-            const std::uint32_t m = cur.count - k < L ? cur.count - k : static_cast<std::uint32_t>(L);
-            alignas(64) std::uint32_t ids[L], halves[L];
-            for (int l = 0; l < L; ++l) {
-              ids[l] = l < static_cast<int>(m) ? lists[cur.begin + k + l] : lists[cur.begin + k];
-              halves[l] = 2 * ids[l];
-            }
-            B ray[8];  // org, tmin, reciprocal direction, tfar
-            detail::load_rays<Arch>(data, ids, ray);
-            B prep[8];  // the prepared rays' second halves (floats 8 to 15): kx, ky, kz, shear, sure range
-            detail::load_rays<Arch>(reinterpret_cast<const float*>(prepared) + 8, halves, prep);
-            const B upper = xsimd::select(detail::mask_from_bits<Arch>((2u << (m - 1)) - 1u), ray[7], B(-kInf));
-            const B s[3] = {prep[3], prep[4], prep[5]};
-            const std::int32_t* uk = prepared[ids[0]].k;
-            const I kx = xsimd::bitwise_cast<I>(prep[0]), ky = xsimd::bitwise_cast<I>(prep[1]);
-            // (padding lanes repeat lane 0, so they never break uniformity)
-            if (xsimd::all((kx == I(uk[0])) & (ky == I(uk[1]))))
-              query.template leaf_lanes<T>(T::lanes(ray, ray[3], s, uk), upper, ids, first, blocks, last, tfar);
-            else {
-              const I k[3] = {kx, ky, xsimd::bitwise_cast<I>(prep[2])};
-              query.template leaf_lanes<T>(T::lanes(ray, ray[3], s, k), upper, ids, first, blocks, last, tfar);
+          if (cur.count >= kStreamLeafList) {
+            // A long list: L rays at a time in lanes, each triangle broadcast to them.
+            using T = detail::TestOf<Arch, Test>;
+            static_assert(offsetof(PreparedRay, k) == 8 * sizeof(float) && offsetof(PreparedRay, s) == 11 * sizeof(float));
+            const int last = detail::last_block_triangles<WideKernels>(first, blocks);
+            for (; k + kStreamLeafLanes <= cur.count; k += L) {
+              const std::uint32_t m = cur.count - k < L ? cur.count - k : static_cast<std::uint32_t>(L);
+              alignas(64) std::uint32_t ids[L], halves[L];  // halves: the prepared rays as 32-byte rows
+              for (int l = 0; l < L; ++l) {
+                ids[l] = l < static_cast<int>(m) ? lists[cur.begin + k + l] : lists[cur.begin + k];
+                halves[l] = 2 * ids[l];
+              }
+              B ray[8];  // org, tmin, reciprocal direction, tfar
+              detail::load_rays<Arch>(data, ids, ray);
+              B prep[8];  // the prepared rays' second halves (floats 8 to 15): kx, ky, kz, shear, sure range
+              detail::load_rays<Arch>(reinterpret_cast<const float*>(prepared) + 8, halves, prep);
+              const B upper = xsimd::select(detail::mask_from_bits<Arch>((2u << (m - 1)) - 1u), ray[7], B(-kInf));
+              const B s[3] = {prep[3], prep[4], prep[5]};
+              const std::int32_t* uk = prepared[ids[0]].k;
+              const I axes[3] = {xsimd::bitwise_cast<I>(prep[0]), xsimd::bitwise_cast<I>(prep[1]),
+                                 xsimd::bitwise_cast<I>(prep[2])};
+              // (kx and ky fix kz; padding lanes repeat lane 0, so they never break uniformity)
+              if (xsimd::all((axes[0] == I(uk[0])) & (axes[1] == I(uk[1]))))
+                query.template leaf_lanes<T>(T::lanes(ray, ray[3], s, uk), upper, ids, first, blocks, last, tfar);
+              else
+                query.template leaf_lanes<T>(T::lanes(ray, ray[3], s, axes), upper, ids, first, blocks, last, tfar);
             }
           }
         }
