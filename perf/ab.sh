@@ -7,15 +7,20 @@
 #   perf/ab.sh /tmp/before build/release/volley bench/embree/kitchen.json \
 #       /tmp/volley_embree_rays/kitchen_shadow.vray "--occluded --mode stream" 6
 #
+# ICOUNT=1 counts instead of timing: one callgrind pass of each executable, the
+# instructions executed inside the traced calls (the CLI's timed tracer; no build, no load),
+# and their ratio B / A. Deterministic, so it shows a change's work where this VM's
+# timing noise hides it; it does not see latencies, misses or mispredictions.
+#
 # Refuses two byte-identical executables: the CLI's CMake target is `volley_cli` (its
 # output is named `volley`); `cmake --build ... --target volley` builds the library alone
 # and leaves the executable as it was, which once turned a session's A/Bs into
 # measurements of the VM's noise (perf/rays.md, session 27). Environment: REPS (default
-# 20), SCENES (default ../shared/scenes). On a shared VM, six pairs or more: identical
-# binaries there gave medians of pairs from 0.86 to 1.08.
+# 20), SCENES (default ../shared/scenes), ICOUNT. On a shared VM, six pairs or more:
+# identical binaries there gave medians of pairs from 0.86 to 1.08.
 set -euo pipefail
 if [ $# -lt 4 ]; then
-  sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
   exit 2
 fi
 OPTIONS=${5:-} PAIRS=${6:-6} REPS=${REPS:-20}
@@ -33,6 +38,23 @@ SCENES=$(realpath -m "${SCENES:-../shared/scenes}")
 if cmp -s "$A" "$B"; then
   echo "ab.sh: $A and $B are the same executable (rebuild with --target volley_cli)" >&2
   exit 2
+fi
+if [ "${ICOUNT:-0}" = 1 ]; then
+  command -v valgrind > /dev/null || { echo "ab.sh: ICOUNT=1 needs valgrind (apt-get install valgrind)" >&2; exit 2; }
+  # The traced calls are the std::function tracers that cmd_trace.cpp's make_tracer returns.
+  count() {
+    local out
+    # shellcheck disable=SC2086  # OPTIONS is a list of options
+    out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='std::_Function_handler*make_tracer*' \
+          "$1" trace "$SCENE" --scenes "$SCENES" --rays "$RAYS" $OPTIONS --reps 1 --threads 1 2>&1) || true
+    sed -nE 's/^==[0-9]+== Collected : ([0-9]+)$/\1/p' <<< "$out" | grep . || { echo "$out" >&2; return 1; }
+  }
+  if ! a=$(count "$A") || ! b=$(count "$B"); then
+    echo "ab.sh: a callgrind run counted nothing (its output above)" >&2
+    exit 1
+  fi
+  echo "$(basename "$SCENE") $(basename "$RAYS") $OPTIONS: instructions A $a B $b, B/A $(python3 -c "print(f'{$b / $a:.4f}')")"
+  exit 0
 fi
 # The rate of one run; the run's own output (warnings, errors) shown only when it has none.
 rate() {
