@@ -45,9 +45,11 @@ if [ "${ICOUNT:-0}" = 1 ]; then
   count() {
     local out
     # shellcheck disable=SC2086  # OPTIONS is a list of options
-    out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='std::_Function_handler*make_tracer*' \
+    # (--trace-children: an executable may be a script that execs volley.)
+    out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --trace-children=yes \
+          --toggle-collect='std::_Function_handler*make_tracer*' \
           "$1" trace "$SCENE" --scenes "$SCENES" --rays "$RAYS" $OPTIONS --reps 1 --threads 1 2>&1) || true
-    sed -nE 's/^==[0-9]+== Collected : ([0-9]+)$/\1/p' <<< "$out" | grep . || { echo "$out" >&2; return 1; }
+    sed -nE 's/^==[0-9]+== Collected : ([1-9][0-9]*)$/\1/p' <<< "$out" | tail -n 1 | grep . || { echo "$out" >&2; return 1; }
   }
   if ! a=$(count "$A") || ! b=$(count "$B"); then
     echo "ab.sh: a callgrind run counted nothing (its output above)" >&2

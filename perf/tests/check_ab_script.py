@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """perf/ab.sh: refuses two identical executables and bad arguments with a clear message,
-and prints one summary line for two different ones (ctest perf.ab_script)."""
+and prints one summary line for two different ones, timed or counted (ICOUNT=1; ctest
+perf.ab_script)."""
 import os
 import re
+import shutil
 import stat
 import subprocess
 import sys
@@ -46,6 +48,18 @@ def main():
         assert rc == 0, (rc, out, err)
         assert re.search(r"^cornell\.json shadow\.vray --occluded --mode stream: A [0-9.]+ B [0-9.]+ Mrays/s, "
                          r"B/A best [0-9.]+, median of 2 pairs [0-9.]+$", out.strip()), out
+        # ICOUNT=1: the traced calls' instructions, the same program on both sides (valgrind
+        # cannot run a sanitizer build).
+        sanitized = any(tag in open(volley, "rb").read() for tag in (b"__asan_init", b"__tsan_init"))
+        if shutil.which("valgrind") and not sanitized:
+            rc, out, err = run([volley, wrapper, scene, rays, "--occluded --mode stream"], dict(os.environ, ICOUNT="1"))
+            m = re.search(r"^cornell\.json shadow\.vray --occluded --mode stream: instructions A ([0-9]+) "
+                          r"B ([0-9]+), B/A ([0-9.]+)$", out.strip())
+            assert rc == 0 and m and m[1] == m[2] and m[3] == "1.0000", (rc, out, err)
+            rc, out, err = run([volley, wrapper, scene, rays, "--no-such-option"], dict(os.environ, ICOUNT="1"))
+            assert rc == 1 and "counted nothing" in err and "--no-such-option" in err, (rc, out, err)
+        else:
+            print("ICOUNT=1 not checked: no valgrind, or a sanitizer build")
     print("perf/ab.sh: checks pass")
 
 
