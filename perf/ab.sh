@@ -41,11 +41,11 @@ if cmp -s "$A" "$B"; then
 fi
 if [ "${ICOUNT:-0}" = 1 ]; then
   command -v valgrind > /dev/null || { echo "ab.sh: ICOUNT=1 needs valgrind (apt-get install valgrind)" >&2; exit 2; }
-  # The traced calls are the std::function tracers that cmd_trace.cpp's make_tracer returns.
+  # The traced calls are the std::function tracers that cmd_trace.cpp's make_tracer returns;
+  # --trace-children follows an executable that is a script exec'ing volley.
   count() {
     local out
     # shellcheck disable=SC2086  # OPTIONS is a list of options
-    # (--trace-children: an executable may be a script that execs volley.)
     out=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --trace-children=yes \
           --toggle-collect='std::_Function_handler*make_tracer*' \
           "$1" trace "$SCENE" --scenes "$SCENES" --rays "$RAYS" $OPTIONS --reps 1 --threads 1 2>&1) || true
