@@ -225,9 +225,21 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
         return 0;
     }();
     if constexpr (detail::kPairedLanes<Arch, Test, BW>) {
-      // Few lanes: two triangles per register (paired_lanes.h).
-      if (r.uniform && std::popcount(act_bits) <= L / 2 && (count > 1 || last > 1)) {
-        result |= detail::occluded_pairs<Arch, BW>(r, upper, sure, act_bits, blocks, count, last) << c;
+      // Few lanes: two triangles per register, on AVX2 four for two lanes and eight for
+      // one (paired_lanes.h).
+      const int n = std::popcount(act_bits);
+      if (r.uniform && n <= L / 2 && (count > 1 || last > 1)) {
+        if constexpr (L == 8 && BW == 8) {
+          if (n == 1 && (count > 1 || last > 4)) {
+            result |= detail::occluded_groups<Arch, BW, 8>(r, upper, sure, act_bits, blocks, count, last) << c;
+            continue;
+          }
+          if (n <= 2 && (count > 1 || last > 2)) {
+            result |= detail::occluded_groups<Arch, BW, 4>(r, upper, sure, act_bits, blocks, count, last) << c;
+            continue;
+          }
+        }
+        result |= detail::occluded_groups<Arch, BW, 2>(r, upper, sure, act_bits, blocks, count, last) << c;
         continue;
       }
     }

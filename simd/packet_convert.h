@@ -23,6 +23,7 @@ struct PacketConvert {
   static void whole(RayPacket<16>& packet, const Ray* rays);
   static void whole(RayPacket<8>& packet, const Ray* rays);
   static void whole(RayPacket<4>& packet, const Ray* rays);
+  static void whole(RayPacket<32>& packet, const Ray* rays);
   /// Whether store() is there: AVX-512 only (elsewhere volley::store's lane-by-lane copy).
   static constexpr bool kStore = kLanes<Arch> == 16;
   /// The 16 lanes of `hits` into out[0 .. 16): what volley::store gives for count = 16.
@@ -85,6 +86,10 @@ void PacketConvert<Arch>::whole(RayPacket<8>& packet, const Ray* rays) {
 }
 template <class Arch>
 void PacketConvert<Arch>::whole(RayPacket<4>& packet, const Ray* rays) {
+  transpose(packet, rays);
+}
+template <class Arch>
+void PacketConvert<Arch>::whole(RayPacket<32>& packet, const Ray* rays) {
   transpose(packet, rays);
 }
 

@@ -12,5 +12,14 @@ template struct WideKernels<Avx2, TriangleTest::watertight>;
 template struct WideKernels<Avx2, TriangleTest::moller, false>;
 template struct WideKernels<Avx2, TriangleTest::plane, false>;
 template struct WideKernels<Avx2, TriangleTest::watertight, false>;
+// Any-hit double packets (32 rays walked as one; WideAccel::occluded(RayPacket<32>)).
+template std::uint32_t WideKernels<Avx2, TriangleTest::moller, true, 32>::occluded(const View&, const RayPacket<32>&);
+template std::uint32_t WideKernels<Avx2, TriangleTest::plane, true, 32>::occluded(const View&, const RayPacket<32>&);
+template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, true, 32>::occluded(const View&,
+                                                                                    const RayPacket<32>&);
+template std::uint32_t WideKernels<Avx2, TriangleTest::moller, false, 32>::occluded(const View&, const RayPacket<32>&);
+template std::uint32_t WideKernels<Avx2, TriangleTest::plane, false, 32>::occluded(const View&, const RayPacket<32>&);
+template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, false, 32>::occluded(const View&,
+                                                                                     const RayPacket<32>&);
 
 }  // namespace volley::simd

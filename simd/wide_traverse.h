@@ -28,6 +28,19 @@ extern template struct WideKernels<Avx2, TriangleTest::watertight>;
 extern template struct WideKernels<Avx2, TriangleTest::moller, false>;
 extern template struct WideKernels<Avx2, TriangleTest::plane, false>;
 extern template struct WideKernels<Avx2, TriangleTest::watertight, false>;
+// AVX2's any-hit double packets (32 rays walked as one): the entry alone is instantiated.
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::moller, true, 32>::occluded(const View&,
+                                                                                       const RayPacket<32>&);
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::plane, true, 32>::occluded(const View&,
+                                                                                      const RayPacket<32>&);
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, true, 32>::occluded(const View&,
+                                                                                           const RayPacket<32>&);
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::moller, false, 32>::occluded(const View&,
+                                                                                        const RayPacket<32>&);
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::plane, false, 32>::occluded(const View&,
+                                                                                       const RayPacket<32>&);
+extern template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, false, 32>::occluded(const View&,
+                                                                                            const RayPacket<32>&);
 extern template struct WideKernels<Avx512, TriangleTest::moller>;
 extern template struct WideKernels<Avx512, TriangleTest::plane>;
 extern template struct WideKernels<Avx512, TriangleTest::watertight>;

@@ -27,9 +27,9 @@ namespace volley::simd {
 // (kPacketSwitchLanes or fewer) goes to the single-ray walk lane by lane, as in the per-lane
 // walk. Without that second test the frustum opened twice the leaves on the kitchen's
 // primary rays (perf/traversal.md).
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
+std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                              const detail::PacketSetup<K>& setup, Query& query) {
   using V8 = detail::Lanes8<Arch>;
   using B = detail::FloatB<Arch>;

@@ -1,5 +1,5 @@
-// The wide-BVH traversal kernels' interface: WideKernels<Arch, Test, Robust> (one ray,
-// packets of 16 rays; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
+// The wide-BVH traversal kernels' interface: WideKernels<Arch, Test, Robust, PK> (one ray,
+// packets of 16 rays, any-hit packets of 32 on AVX2; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
 // leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its
 // walks share. The bodies are in the files beside this one, one concept each:
 //   queries.h       what is asked: each query's leaf action and termination rule
@@ -108,9 +108,11 @@ struct alignas(64) PacketSetup {
 };
 }  // namespace detail
 
-/// Traversal of the wide BVH with the triangle test `Test` on Arch; leaf blocks hold
-/// W = kLanes<SingleRayArch<Arch>> triangles (8 on AVX-512, whose packets still run 16
-/// lanes: single rays were faster on 8-triangle leaves, packets no slower). Robust = false
+/// Traversal of the wide BVH with the triangle test `Test` on Arch, packets of PK rays
+/// (kWidePacket; 32 for AVX2's any-hit double packets, whose class instantiates only
+/// occluded(View, RayPacket<32>)); leaf blocks hold W = kLanes<SingleRayArch<Arch>>
+/// triangles (8 on AVX-512, whose packets still run 16 lanes: single rays were faster on
+/// 8-triangle leaves, packets no slower). Robust = false
 /// drops the exit padding (kSlabExitPad) from the box test and the stack pruning
 /// (Options::robust = false, the fast path; the NaN-safe operand order stays, it costs
 /// nothing); its answers may differ from the oracle's where a ray grazes a box (the mutation
@@ -125,13 +127,13 @@ struct alignas(64) PacketSetup {
 /// form, so between two overlapping coplanar triangles whose t differ by an ulp or two the
 /// form that meets the farther one first may keep it (4 of 262144 primary rays on
 /// conference before its camera file; the oracle's own traversal does the same).
-template <class Arch, TriangleTest Test, bool Robust = true>
+template <class Arch, TriangleTest Test, bool Robust = true, int PK = kWidePacket>
 struct WideKernels {
   using Isa = Arch;
   static constexpr TriangleTest kTest = Test;
   static constexpr int N = kWideN;
   static constexpr int L = kLanes<Arch>;
-  static constexpr int K = kWidePacket;
+  static constexpr int K = PK;
   /// The single-ray leaf kernels' arch; its lanes are the block width (8 on AVX-512).
   using SingleArch = SingleRayArch<Arch>;
   static constexpr int W = kLanes<SingleArch>;

@@ -9,11 +9,11 @@
 
 namespace volley::simd {
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays,
+std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays,
                                                                   Query& query) {
-  if (bvh.root == wide_ref::kEmptyRef || (rays.active & ((1u << K) - 1u)) == 0) return 0;
+  if (bvh.root == wide_ref::kEmptyRef || (rays.active & static_cast<std::uint32_t>((std::uint64_t{1} << K) - 1u)) == 0) return 0;
   PreparedPacket<K> prep;
   prep.rays = rays;
   detail::PacketSetup<K> setup;
@@ -30,8 +30,8 @@ std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet_query(const WideView
   return trace_packet<Query, true, false>(bvh, prep, setup, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-std::uint32_t WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const RayPacket<K>& rays,
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+std::uint32_t WideKernels<Arch, Test, Robust, PK>::walk_instances(const InstanceView& top, const RayPacket<K>& rays,
                                                               InstancePacketVisit visit, InstanceWalk mode) {
   if (mode == InstanceWalk::any) {
     detail::InstancesPacket<WideKernels, true> query{visit};
@@ -43,32 +43,32 @@ std::uint32_t WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView
   return query.hit;
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::intersect(const View& bvh, const RayPacket<K>& rays, HitPacket<K>& hits) {
   detail::ClosestHitPacket<WideKernels> query{hits};
   trace_packet_query(bvh, rays, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-std::uint32_t WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const RayPacket<K>& rays) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+std::uint32_t WideKernels<Arch, Test, Robust, PK>::occluded(const View& bvh, const RayPacket<K>& rays) {
   detail::AnyHitPacket<WideKernels> query;
   return trace_packet_query(bvh, rays, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::all_hits(const View& bvh, const RayPacket<K>& rays, std::vector<Hit>* out) {
   auto sink = [out](int lane, std::uint32_t prim, float t, float u, float v) { append_hit(out[lane], Hit{t, u, v, prim}); };
   detail::AllHitsPacket<WideKernels, decltype(sink)> query{sink};
   trace_packet_query(bvh, rays, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
   screen_inline(rays, setup);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;
   constexpr int C = K / L;

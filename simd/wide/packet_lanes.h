@@ -22,8 +22,10 @@ struct PacketLanes {
   static constexpr int C = K / L;  // chunks of L lanes
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
   // Lane i's bit, read by a broadcast from memory (1 << i in a register takes three steps).
-  static constexpr std::int32_t kLaneBit[16] = {1,   2,   4,    8,    16,   32,   64,    128,
-                                                256, 512, 1024, 2048, 4096, 8192, 16384, 32768};
+  static constexpr std::uint32_t kLaneBit[32] = {
+      1u << 0,  1u << 1,  1u << 2,  1u << 3,  1u << 4,  1u << 5,  1u << 6,  1u << 7,  1u << 8,  1u << 9,  1u << 10,
+      1u << 11, 1u << 12, 1u << 13, 1u << 14, 1u << 15, 1u << 16, 1u << 17, 1u << 18, 1u << 19, 1u << 20, 1u << 21,
+      1u << 22, 1u << 23, 1u << 24, 1u << 25, 1u << 26, 1u << 27, 1u << 28, 1u << 29, 1u << 30, 1u << 31};
 
   // Origin, reciprocal direction (the oracle's, ±inf for ±0), tmin and the current upper end
   // tfar of every lane (invalid or finished lanes: -inf).
@@ -123,7 +125,7 @@ struct PacketLanes {
                                                     const RayPacket<K>& rays, const PacketSetup<K>& setup,
                                                     const float* far, B pad) {
     static_assert(L == kWideN && L == 8, "one lane per child");
-    static_assert(K <= 16, "kLaneBit holds 16 lanes");
+    static_assert(K <= 32, "kLaneBit holds 32 lanes");
     B near_plane[3], far_plane[3];
     if constexpr (Uniform)
       for (int a = 0; a < 3; ++a) {
@@ -147,7 +149,7 @@ struct PacketLanes {
       const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, B(far[i])))) * pad;
       // Lane i's bit in the children it enters (an and of the compare, no select).
       const __m256i hit = _mm256_castps_si256(_mm256_cmp_ps(entry, exit, _CMP_LE_OQ));
-      entered = _mm256_or_si256(entered, _mm256_and_si256(hit, _mm256_set1_epi32(kLaneBit[i])));
+      entered = _mm256_or_si256(entered, _mm256_and_si256(hit, _mm256_set1_epi32(static_cast<std::int32_t>(kLaneBit[i]))));
     }
     return entered;
   }

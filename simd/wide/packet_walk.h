@@ -36,9 +36,9 @@ namespace volley::simd {
 // an any-hit walk asks the packet's interval family first at each node that all its
 // running lanes entered, and where the family settles every child (each entered by all the
 // packet's rays or by none) the lanes' own tests are skipped (PacketFamily).
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, bool Uniform, bool NoZero, class Leaves>
-std::uint32_t WideKernels<Arch, Test, Robust>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
+std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                                             const detail::PacketSetup<K>& setup, Query& query) {
   using B = detail::FloatB<Arch>;
   using M = detail::MaskB<Arch>;

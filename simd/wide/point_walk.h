@@ -70,8 +70,8 @@ struct BlockEdges<Arch, MollerBlock<W>> {
 
 }  // namespace detail
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::closest_point(const View& bvh, core::PointQuery& query) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::closest_point(const View& bvh, core::PointQuery& query) {
   using Edges = detail::BlockEdges<SingleArch, Block>;
   if constexpr (!Edges::kHasVertices) {
     throw std::invalid_argument("point queries need the watertight or Moller triangle test (the plane test's blocks keep no vertices)");

@@ -16,16 +16,16 @@
 
 namespace volley::simd {
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-bool WideKernels<Arch, Test, Robust>::trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
+bool WideKernels<Arch, Test, Robust, PK>::trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                    Query& query) {
   return trace_ray(bvh, ray, start, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-bool WideKernels<Arch, Test, Robust>::trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
+bool WideKernels<Arch, Test, Robust, PK>::trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
                                                  const detail::PacketSetup<K>& setup, int i, std::uint32_t start,
                                                  Query& query) {
   const RayPacket<K>& r = prep.rays;
@@ -48,9 +48,9 @@ bool WideKernels<Arch, Test, Robust>::trace_lane(const WideView<Leaves>& bvh, co
   return query.answer();
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-bool WideKernels<Arch, Test, Robust>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
+bool WideKernels<Arch, Test, Robust, PK>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                 Query& query) {
   if (start == wide_ref::kEmptyRef) return query.answer();
   PreparedRay pr;
@@ -63,9 +63,9 @@ bool WideKernels<Arch, Test, Robust>::trace_ray(const WideView<Leaves>& bvh, con
   return query.answer();
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, bool NoZero, class Leaves>
-void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const PreparedRay& pr, __m128 inv,
+void WideKernels<Arch, Test, Robust, PK>::walk(const WideView<Leaves>& bvh, const PreparedRay& pr, __m128 inv,
                                            std::uint32_t start, Query& query) {
   using V8 = detail::Lanes8<Arch>;
   static_assert(N == 8, "the single-ray node test reads eight children");
@@ -290,9 +290,9 @@ void WideKernels<Arch, Test, Robust>::walk(const WideView<Leaves>& bvh, const Pr
   }
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <bool SureRange>
-detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
+detail::RayScreen WideKernels<Arch, Test, Robust, PK>::prepare_single(const Ray& ray, PreparedRay& pr, __m128& inv) {
   // Rejected as by the oracle: non-finite origin or direction, NaN interval ends. The ray's
   // eight floats in two registers: x - x is 0 exactly for finite x (NaN for ±inf, NaN), and
   // the interval ends (lane 3) need only be ordered, so one compare per kind and one blend.
@@ -337,22 +337,22 @@ detail::RayScreen WideKernels<Arch, Test, Robust>::prepare_single(const Ray& ray
   return screened;
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect_erased(const void* bvh, const Ray& ray, Hit& hit) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::intersect_erased(const void* bvh, const Ray& ray, Hit& hit) {
   const View& view = *static_cast<const View*>(bvh);
   detail::ClosestHitRay<WideKernels> query{hit};
   trace_ray(view, ray, view.root, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-bool WideKernels<Arch, Test, Robust>::occluded_erased(const void* bvh, const Ray& ray) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+bool WideKernels<Arch, Test, Robust, PK>::occluded_erased(const void* bvh, const Ray& ray) {
   const View& view = *static_cast<const View*>(bvh);
   detail::AnyHitRay<WideKernels> query;
   return trace_ray(view, ray, view.root, query);
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-bool WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, const Ray& ray, float bound,
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+bool WideKernels<Arch, Test, Robust, PK>::walk_instances(const InstanceView& top, const Ray& ray, float bound,
                                                      InstanceVisit visit, InstanceWalk mode) {
   switch (mode) {
     case InstanceWalk::closest: {
@@ -371,8 +371,8 @@ bool WideKernels<Arch, Test, Robust>::walk_instances(const InstanceView& top, co
   return false;
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-WalkCounts WideKernels<Arch, Test, Robust>::walk_counts(const View& view, const Ray& ray, bool any_hit) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+WalkCounts WideKernels<Arch, Test, Robust, PK>::walk_counts(const View& view, const Ray& ray, bool any_hit) {
   WalkCounts counts;
   if (any_hit) {
     detail::AnyHitRay<WideKernels> query;
@@ -387,8 +387,8 @@ WalkCounts WideKernels<Arch, Test, Robust>::walk_counts(const View& view, const 
   return counts;
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::all_hits(const View& view, const Ray& ray, std::vector<Hit>& out) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::all_hits(const View& view, const Ray& ray, std::vector<Hit>& out) {
   auto sink = [&out](std::uint32_t prim, float t, float u, float v) { append_hit(out, Hit{t, u, v, prim}); };
   detail::AllHitsRay<WideKernels, decltype(sink)> query{sink};
   trace_ray(view, ray, view.root, query);

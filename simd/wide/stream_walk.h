@@ -67,9 +67,9 @@ template <class Arch>
 // visits differs (the closest hit keeps the oracle's rule by its bound and tie rule).
 // Children's lists are walked nearest first by their rays' mean entry distance for a
 // query that asks (kNearFirst), in slot order otherwise.
-template <class Arch, TriangleTest Test, bool Robust>
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query>
-void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query) {
+void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query) {
   using B = detail::FloatB<Arch>;
   using I = detail::IntB<Arch>;
   using M = detail::MaskB<Arch>;
@@ -240,8 +240,8 @@ void WideKernels<Arch, Test, Robust>::trace_stream(const View& bvh, const Ray* r
   }
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray* rays, std::size_t count,
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::occluded(const View& bvh, const Ray* rays, std::size_t count,
                                                std::uint8_t* blocked) {
   std::memset(blocked, 0, count);
   detail::AnyHitStream<WideKernels> query{blocked};
@@ -251,8 +251,8 @@ void WideKernels<Arch, Test, Robust>::occluded(const View& bvh, const Ray* rays,
   }
 }
 
-template <class Arch, TriangleTest Test, bool Robust>
-void WideKernels<Arch, Test, Robust>::intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits) {
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits) {
   detail::ClosestHitStream<WideKernels> query{hits};
   for (std::size_t first = 0; first < count; first += kStreamBatch) {
     query.hits = hits + first;

@@ -2,6 +2,7 @@
 // (volley/packet.h): whole packets by the widest ISA's transposes (simd/packet_convert.h),
 // chosen once; partial ones, or any on a CPU without them, lane by lane as the header's
 // templates do.
+#include "accel/wide_accel.h"
 #include "simd/arch.h"
 #include "simd/dispatch.h"
 #include "simd/packet_convert.h"
@@ -48,6 +49,9 @@ void load(RayPacket<8>& packet, const Ray* rays, int count) {
   load_lanes(packet, rays, count);
 }
 void load(RayPacket<4>& packet, const Ray* rays, int count) {
+  load_lanes(packet, rays, count);
+}
+void load(RayPacket<32>& packet, const Ray* rays, int count) {
   load_lanes(packet, rays, count);
 }
 

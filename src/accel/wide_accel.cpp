@@ -5,8 +5,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "accel/wide_build.h"
 #include "simd/aligned.h"
@@ -22,6 +24,9 @@ class WideAccelFor final : public WideAccel {
   using Kernels = simd::WideKernels<Arch, Test, Robust>;
   using Block = typename Kernels::Block;
   static constexpr int W = Kernels::W;
+  /// Whether any-hit double packets are walked as one: on AVX2, whose any-hit walk tests
+  /// nodes lane by lane (a node's and a leaf call's fixed work paid once for 32 rays).
+  static constexpr bool kDouble = std::is_same_v<Arch, simd::Avx2>;
 
   WideAccelFor() : WideAccel({&Kernels::intersect_erased, &Kernels::occluded_erased, &view_}) {}
   WideAccelFor(const WideAccelFor&) = delete;  // single_ points at view_
@@ -77,6 +82,22 @@ class WideAccelFor final : public WideAccel {
     Kernels::intersect(view_, rays, hits);
   }
   std::uint32_t occluded(const RayPacket<16>& rays) const override { return Kernels::occluded(view_, rays); }
+  std::uint32_t occluded(const RayPacket<32>& rays) const override {
+    if constexpr (kDouble) {
+      return simd::WideKernels<Arch, Test, Robust, 32>::occluded(view_, rays);
+    } else {
+      // Elsewhere two packets of 16.
+      RayPacket<16> half[2];
+      for (int h = 0; h < 2; ++h) {
+        const float* from[8] = {rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz, rays.tmin, rays.tmax};
+        float* to[8] = {half[h].ox, half[h].oy, half[h].oz, half[h].dx, half[h].dy, half[h].dz, half[h].tmin, half[h].tmax};
+        for (int f = 0; f < 8; ++f) std::memcpy(to[f], from[f] + 16 * h, 16 * sizeof(float));
+        half[h].active = (rays.active >> (16 * h)) & 0xffffu;
+      }
+      return Kernels::occluded(view_, half[0]) | (Kernels::occluded(view_, half[1]) << 16);
+    }
+  }
+  bool double_packets() const override { return kDouble; }
   void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const override {
     Kernels::occluded(view_, rays, count, blocked);
   }

@@ -14,6 +14,11 @@
 #include "volley/packet.h"
 #include "volley/ray.h"
 
+namespace volley {
+/// volley::load for the double packets of WideAccel::occluded (src/accel/packet_convert.cpp).
+void load(RayPacket<32>& packet, const Ray* rays, int count);
+}  // namespace volley
+
 namespace volley::accel {
 
 /// A built wide BVH as plain memory (Accel::save writes it, Accel::load maps it back).
@@ -84,6 +89,11 @@ class WideAccel {
   virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const = 0;
   /// Mask of the active lanes that something occludes.
   virtual std::uint32_t occluded(const RayPacket<16>& rays) const = 0;
+  /// The same for a double packet of 32 rays, walked as one where the ISA has the walk
+  /// (double_packets()), else as two packets of 16.
+  virtual std::uint32_t occluded(const RayPacket<32>& rays) const = 0;
+  /// Whether occluded(RayPacket<32>) walks the 32 rays as one packet (AVX2).
+  virtual bool double_packets() const = 0;
   /// Streams by the stream walk (simd/wide/stream_walk.h): blocked[i] = 1 when something
   /// occludes rays[i], else 0; the closest hit of each ray into hits[i] (hits[i].t bounds
   /// its search).

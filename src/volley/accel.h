@@ -193,7 +193,8 @@ class VOLLEY_API Accel {
   /// closest hits ray by ray, which was faster for diffuse rays (perf/traversal.md);
   /// occlusion on AVX-512 and AVX2, and every run of a scene with instances, as a packet
   /// (shadow rays straddling one axis plane gained there; with instances a packet shares
-  /// the top level's walk: perf/instances.md). The stream walk reorders nothing the caller
+  /// the top level's walk: perf/instances.md); on AVX2, in a scene of one BVH and with no
+  /// masks, two neighbouring occlusion runs as one packet of 32 (docs/kernels.md). The stream walk reorders nothing the caller
   /// sees. Same answers as intersect(ray) per ray.
   /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
   /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in

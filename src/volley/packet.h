@@ -17,7 +17,8 @@ namespace volley {
 /// them inert (org = dir = 0, tmin = 0, tmax = -inf: no hit possible).
 template <int K>
 struct alignas(64) RayPacket {
-  static_assert(K == 4 || K == 8 || K == 16, "K rays per packet: 4, 8 or 16");
+  // (32: the library's own, for the double packets of its occlusion streams on AVX2.)
+  static_assert(K == 4 || K == 8 || K == 16 || K == 32, "K rays per packet: 4, 8 or 16");
   float ox[K], oy[K], oz[K];  // 12K bytes: origins
   float dx[K], dy[K], dz[K];  // 12K bytes: directions (need not be normalized)
   float tmin[K], tmax[K];     //  8K bytes: search interval tmin <= t < tmax

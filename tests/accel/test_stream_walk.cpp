@@ -183,6 +183,48 @@ TEST_CASE("stream walk: Accel's streams of bounce rays answer as single rays, ma
   }
 }
 
+TEST_CASE("Accel's occlusion streams of shadow rays: double packets, a run held back, a tail, as single rays") {
+  // Runs of 16 shadow rays (one light, one octant) go as packets; on AVX2 two neighbouring
+  // runs as one double packet of 32. Here an odd number of shadow runs, one bounce run (to
+  // the stream walk or ray by ray) between two of them, a run with NaN lanes, and a tail of
+  // 7: a run held back for its neighbour must still be answered, and once only.
+  const Soup soup = random_soup(2000, 43);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> pos(-10.0f, 10.0f), near(-0.8f, 0.8f);
+  const glm::vec3 light(30.0f, 24.0f, 18.0f);
+  const std::vector<Ray> bounce = bounce_rays(16, 11.0f, 19);
+  std::vector<Ray> rays;
+  for (int run = 0; run < 41; ++run) {
+    if (run == 6) rays.insert(rays.end(), bounce.begin(), bounce.end());
+    const glm::vec3 centre(pos(rng), pos(rng), pos(rng));
+    for (int i = 0; i < 16; ++i) {
+      const glm::vec3 o = centre + glm::vec3(near(rng), near(rng), near(rng));
+      rays.push_back(make_ray(o, light - o, 0.0f, 1.0f));
+    }
+    if (run == 9) rays.back().dir[2] = kNaN, rays[rays.size() - 5].tmax = kNaN;
+  }
+  for (int i = 0; i < 7; ++i) rays.push_back(rays[3 * i]);
+  for (Isa isa : simd_isas()) {
+    CAPTURE(std::string(volley::to_string(isa)));
+    Accel accel;
+    std::vector<std::uint32_t> idx(3 * soup.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<std::uint32_t>(i);
+    accel.add_triangles(soup.xyz.data(), 3 * soup.size(), idx.data(), soup.size());
+    accel.commit(volley::Options{TriangleTest::watertight, isa});
+    std::vector<std::uint8_t> blocked(rays.size(), 7);
+    accel.occluded(rays.data(), rays.size(), blocked.data());
+    std::size_t wrong = 0, hit = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const bool want = accel.occluded(rays[i]);
+      hit += want;
+      wrong += blocked[i] != (want ? 1 : 0);
+    }
+    CHECK(hit > rays.size() / 10);
+    CHECK(hit < rays.size() * 9 / 10);
+    CHECK(wrong == 0);
+  }
+}
+
 TEST_CASE("stream walk: long leaf lists tested in lanes give the single ray's hit bit for bit") {
   // A grid of 6 x 3 unit squares (two triangles each, shared edges and vertices) and a tilted copy
   // above it, in one leaf (the root) or in leaves of at most eight: the leaves' lists are

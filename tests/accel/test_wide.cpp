@@ -235,28 +235,39 @@ TEST_CASE("wide: coherent shadow packets through triangle vertices answer as bru
         rays.push_back(make_ray(o, light - o, 0.0f, 1.0f));
       }
     }
-  std::size_t unpadded_wrong = 0;  // over the ISAs: on some one alone rounding may not show it
+  // Packets of 16, and double packets of 32 (two neighbouring packets: on AVX2 one walk).
+  std::size_t unpadded_wrong[2] = {0, 0};  // over the ISAs: on some one alone rounding may not show it
   for (Isa isa : simd_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     const std::vector<Hit> want = brute_force_all(soup, TriangleTest::watertight, rays, isa);
     const auto blocked = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
     CHECK(blocked > static_cast<long>(rays.size() / 4));
-    std::size_t wrong[2] = {0, 0};
+    std::size_t wrong[2][2] = {{0, 0}, {0, 0}};  // [double][robust]
     for (bool robust : {true, false}) {
       const auto wide = one_triangle_per_leaf(soup, isa, robust);
       volley::RayPacket<16> p;
       for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
         volley::load(p, rays.data() + first, 16);
         const std::uint32_t got = wide->occluded(p);
-        for (int i = 0; i < 16; ++i) wrong[robust] += ((got >> i) & 1u) != (want[first + i].hit() ? 1u : 0u);
+        for (int i = 0; i < 16; ++i) wrong[0][robust] += ((got >> i) & 1u) != (want[first + i].hit() ? 1u : 0u);
+      }
+      volley::RayPacket<32> d;
+      for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
+        volley::load(d, rays.data() + first, 32);
+        const std::uint32_t got = wide->occluded(d);
+        for (int i = 0; i < 32; ++i) wrong[1][robust] += ((got >> i) & 1u) != (want[first + i].hit() ? 1u : 0u);
       }
     }
     MESSAGE(std::string(volley::to_string(isa)), ": ", rays.size(), " shadow rays through vertices, ", blocked,
-            " blocked; packets wrong on ", wrong[0], " unpadded, ", wrong[1], " padded");
-    CHECK(wrong[1] == 0);
-    unpadded_wrong += wrong[0];
+            " blocked; packets wrong on ", wrong[0][0], " unpadded, ", wrong[0][1], " padded; double packets on ",
+            wrong[1][0], " unpadded, ", wrong[1][1], " padded");
+    CHECK(wrong[0][1] == 0);
+    CHECK(wrong[1][1] == 0);
+    unpadded_wrong[0] += wrong[0][0];
+    unpadded_wrong[1] += wrong[1][0];
   }
-  CHECK(unpadded_wrong > 0);
+  CHECK(unpadded_wrong[0] > 0);
+  CHECK(unpadded_wrong[1] > 0);
 }
 
 TEST_CASE("wide: occlusion packets with deferred hand-offs answer as brute force (every ISA and test)") {
@@ -317,6 +328,30 @@ TEST_CASE("wide: occlusion packets with deferred hand-offs answer as brute force
         CHECK(wrong == 0);
         CHECK(wrong_partial == 0);
         CHECK(wrong_poisoned == 0);
+        // Double packets (32 lanes: on AVX2 one walk, elsewhere two packets), lanes of
+        // the upper half inactive or poisoned too.
+        constexpr std::uint32_t kSome = 0xc3e1b5a6u;
+        std::size_t wrong32 = 0, wrong32_partial = 0, wrong32_poisoned = 0;
+        volley::RayPacket<32> d;
+        for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
+          volley::load(d, rays.data() + first, 32);
+          const std::uint32_t all = wide->occluded(d);
+          d.active = kSome;
+          const std::uint32_t partial = wide->occluded(d);
+          d.active = ~0u;
+          for (int i = 1; i < 32; i += 5) d.dz[i] = kNaN;
+          d.tmax[30] = kNaN;
+          const std::uint32_t poisoned = wide->occluded(d);
+          for (int i = 0; i < 32; ++i) {
+            const bool hit = want[first + i].hit();
+            wrong32 += ((all >> i) & 1u) != (hit ? 1u : 0u);
+            wrong32_partial += ((partial >> i) & 1u) != ((kSome >> i) & 1u && hit ? 1u : 0u);
+            wrong32_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && i != 30 && hit ? 1u : 0u);
+          }
+        }
+        CHECK(wrong32 == 0);
+        CHECK(wrong32_partial == 0);
+        CHECK(wrong32_poisoned == 0);
       }
     }
 }
