@@ -3,6 +3,7 @@
 // or one triangle broadcast to a packet, sheared into ray space. Out-of-class members of
 // WatertightTest, included by watertight.h.
 #pragma once
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -97,6 +98,15 @@ auto WatertightTest<Arch, Crossing>::load(const PreparedPacket<K>& p, int offset
   if (p.uniform != 0) return lanes(o, tmin, s, p.uk);
   const I k[3] = {I::load_aligned(p.k[0] + offset), I::load_aligned(p.k[1] + offset),
                   I::load_aligned(p.k[2] + offset)};
+  // A chunk whose active lanes share one permutation where the packet's do not (more often
+  // in double packets of 32): the uniform form for the chunk (kx and ky fix kz).
+  const std::uint32_t act = (p.rays.active >> offset) & ((2u << (W - 1)) - 1u);
+  if (act != 0) {
+    const int f = offset + std::countr_zero(act);
+    const std::int32_t uk[3] = {p.k[0][f], p.k[1][f], p.k[2][f]};
+    if ((bits_from_mask<Arch>(xsimd::bool_cast((k[0] == I(uk[0])) & (k[1] == I(uk[1])))) & act) == act)
+      return lanes(o, tmin, s, uk);
+  }
   return lanes(o, tmin, s, k);
 }
 
