@@ -5,7 +5,7 @@
 // for up to two lanes and G = 8 (a whole register, the single-ray form) for one. 1 / G as
 // many triangle tests as the one-triangle-per-register form. Every lane runs the same
 // operations on the same ray and triangle as in that form, so the answers are the same bit
-// for bit. Watertight test with one axis permutation for the packet (uniform) only;
+// for bit. Watertight test with one axis permutation for the chunk (uniform) only;
 // AVX-512 (pairs: 8 of 16 lanes) and AVX2 (pairs, quads and the whole register).
 #pragma once
 #include <immintrin.h>
