@@ -149,7 +149,8 @@ struct PacketLanes {
       const B exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, B(far[i])))) * pad;
       // Lane i's bit in the children it enters (an and of the compare, no select).
       const __m256i hit = _mm256_castps_si256(_mm256_cmp_ps(entry, exit, _CMP_LE_OQ));
-      entered = _mm256_or_si256(entered, _mm256_and_si256(hit, _mm256_set1_epi32(static_cast<std::int32_t>(kLaneBit[i]))));
+      const __m256i bit = _mm256_set1_epi32(static_cast<std::int32_t>(kLaneBit[i]));
+      entered = _mm256_or_si256(entered, _mm256_and_si256(hit, bit));
     }
     return entered;
   }

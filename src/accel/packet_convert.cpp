@@ -1,7 +1,7 @@
-// volley::load for packets of 4, 8 and 16 and volley::store for packets of 16
-// (volley/packet.h): whole packets by the widest ISA's transposes (simd/packet_convert.h),
-// chosen once; partial ones, or any on a CPU without them, lane by lane as the header's
-// templates do.
+// volley::load for packets of 4, 8 and 16 (and the library's double packets of 32) and
+// volley::store for packets of 16 (volley/packet.h): whole packets by the widest ISA's
+// transposes (simd/packet_convert.h), chosen once; partial ones, or any on a CPU without
+// them, lane by lane as the header's templates do.
 #include "accel/wide_accel.h"
 #include "simd/arch.h"
 #include "simd/dispatch.h"
