@@ -10,10 +10,12 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "accel/wide_accel.h"
 #include "core/bvh.h"
 #include "core/triangle.h"
 #include "simd/dispatch.h"
@@ -313,6 +315,19 @@ inline std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
     }
   }
   return rays;
+}
+
+/// The wide engine (watertight test) over `soup` with one triangle per leaf, so that every
+/// leaf box is a triangle's own.
+inline std::unique_ptr<volley::accel::WideAccel> one_triangle_per_leaf(const Soup& soup, Isa isa, bool robust) {
+  volley::core::BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  const volley::core::Bvh bvh = volley::core::build_bvh(soup.boxes(), one_per_leaf);
+  std::vector<std::uint32_t> ids(soup.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(i);
+  auto wide = volley::accel::WideAccel::create(TriangleTest::watertight, isa, robust);
+  wide->build(bvh, soup.xyz.data(), ids.data());
+  return wide;
 }
 
 }  // namespace accel_test
