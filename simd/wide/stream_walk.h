@@ -130,11 +130,14 @@ void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ra
             const int last = detail::last_block_triangles<WideKernels>(first, blocks);
             for (; k + kStreamLeafLanes <= cur.count; k += L) {
               const std::uint32_t m = cur.count - k < L ? cur.count - k : static_cast<std::uint32_t>(L);
-              alignas(64) std::uint32_t ids[L], halves[L];  // halves: the prepared rays as 32-byte rows
-              for (int l = 0; l < L; ++l) {
-                ids[l] = l < static_cast<int>(m) ? lists[cur.begin + k + l] : lists[cur.begin + k];
-                halves[l] = 2 * ids[l];
+              const std::uint32_t* ids = lists + cur.begin + k;  // as in the node split below
+              alignas(64) std::uint32_t tail[L], halves[L];  // halves: the prepared rays as 32-byte rows
+              if (m < L) {
+                for (int l = 0; l < L; ++l) tail[l] = l < static_cast<int>(m) ? ids[l] : ids[0];
+                ids = tail;
               }
+              const I twice = I::load_unaligned(reinterpret_cast<const std::int32_t*>(ids));
+              (twice + twice).store_aligned(reinterpret_cast<std::int32_t*>(halves));
               B ray[8];  // org, tmin, reciprocal direction, tfar
               detail::load_rays<Arch>(data, ids, ray);
               B prep[8];  // the prepared rays' second halves (floats 8 to 15): kx, ky, kz, shear, sure range
@@ -173,9 +176,15 @@ void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ra
       const std::uint32_t* list = lists + cur.begin;
       for (std::uint32_t g = 0; g < cur.count; g += L) {
         const std::uint32_t m = cur.count - g < L ? cur.count - g : static_cast<std::uint32_t>(L);
-        alignas(64) std::uint32_t ids[L];
-        for (int l = 0; l < L; ++l) ids[l] = l < static_cast<int>(m) ? list[g + l] : list[g];
-        const I idx = I::load_aligned(reinterpret_cast<const std::int32_t*>(ids));
+        // A whole group's ids are read where they lie; a last partial one's are copied,
+        // its empty lanes repeating the first id.
+        alignas(64) std::uint32_t tail[L];
+        const std::uint32_t* ids = list + g;
+        if (m < L) {
+          for (int l = 0; l < L; ++l) tail[l] = l < static_cast<int>(m) ? list[g + l] : list[g];
+          ids = tail;
+        }
+        const I idx = I::load_unaligned(reinterpret_cast<const std::int32_t*>(ids));
         B ray[8];  // org, tmin, reciprocal direction, tfar
         detail::load_rays<Arch>(data, ids, ray);
         const B gx = ray[0], gy = ray[1], gz = ray[2], gtmin = ray[3];
