@@ -13,6 +13,14 @@ best (`volley trace --stats`).
 Prints a markdown table with the CPU model. Environment: B (build folder, default
 build/release), R (repetitions, default 5), SCENES (default ../shared/scenes), RAYS (where
 the ray files go, default /tmp/volley_embree_rays), ONLY (comma-separated scene names).
+
+ICOUNT=1 counts instead of timing: `volley_vs_embree` once under callgrind per scene and
+workload (both engines at medium quality, one untimed warm-up and one timed pass each),
+and for every mode the instructions per ray inside each engine's entry (Embree's rtc
+call; volley's Accel call), their ratio volley / Embree. Deterministic: a shared machine's
+pace, which moves the timed table by 10-20% between runs, does not enter; latencies,
+misses and mispredictions do not either. Needs valgrind; some 30-60 s per scene and
+workload under callgrind (kitchen and Sponza longest).
 """
 import json
 import os
@@ -51,13 +59,66 @@ def cpu_model():
     return "unknown CPU"
 
 
+# volley's entry for each mode of volley_vs_embree (Embree's is the C call the result names).
+VOLLEY_ENTRY = {
+    "single": "volley::Accel::intersect(volley::Ray const&) const",
+    "packet": "void volley::Accel::intersect<16>(volley::RayPacket<16> const&, volley::HitPacket<16>&) const",
+    "stream": "volley::Accel::intersect(volley::Ray const*, unsigned long, volley::Hit*, int) const",
+    "occluded1": "volley::Accel::occluded(volley::Ray const&) const",
+    "occluded16": "unsigned int volley::Accel::occluded<16>(volley::RayPacket<16> const&) const",
+    "occluded_stream": "volley::Accel::occluded(volley::Ray const*, unsigned long, unsigned char*, int) const",
+}
+
+
+def inclusive_costs(annotated):
+    """{function: inclusive instructions} from `callgrind_annotate --inclusive=yes` output
+    (lines 'COUNT (PERCENT)  FILE:FUNCTION [OBJECT]'); a function listed twice keeps its first."""
+    costs = {}
+    for line in annotated.splitlines():
+        m = re.match(r"\s*([\d,]+) \([^)]*\)\s+[^:\s]*:(.*?)(?: \[[^\]]*\])?$", line)
+        if m:
+            costs.setdefault(m[2].strip(), int(m[1].replace(",", "")))
+    return costs
+
+
+def entry_cost(costs, name):
+    """The cost of function `name` (a C function matches by its bare name)."""
+    if name in costs:
+        return costs[name]
+    sys.exit(f"embree_best: no callgrind cost for {name}")
+
+
+def count(name, scene, workload, rays):
+    """One row of the ICOUNT table: per mode, Embree's and volley's instructions per ray."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out, json_out = os.path.join(tmp, "callgrind.out"), os.path.join(tmp, "result.json")
+        run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"{B}/volley_vs_embree", scene,
+             "--scenes", SCENES_DIR, "--rays", rays, "--modes", MODES[workload], "--reps", "1", "--json", json_out])
+        result = json.load(open(json_out))
+        costs = inclusive_costs(run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", out]))
+    passes = 2 * result["ray_count"]  # the warm-up and the timed pass
+    cells = []
+    for m in result["modes"]:
+        embree = entry_cost(costs, m["embree_call"]) / passes
+        volley = entry_cost(costs, VOLLEY_ENTRY[m["mode"]]) / passes
+        cells.append(f"{embree:.0f} / {volley:.0f} ({volley / embree:.3f})")
+    print(f"| {name} | {workload} | " + " | ".join(cells) + " |", flush=True)
+
+
 def main():
     only = set(filter(None, os.environ.get("ONLY", "").split(",")))
     os.makedirs(RAYS, exist_ok=True)
-    print(f"CPU: {cpu_model()}, {os.cpu_count()} cores; one thread; R = {R} repetitions per engine, mode and quality\n")
-    print("| scene | rays | Embree best Mrays/s (call, quality) | volley best Mrays/s (mode, quality) | volley / Embree |"
-          " nodes/ray | leaves/ray | triangles/ray | agreement | volley medium / high |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    icount = os.environ.get("ICOUNT", "0") == "1"
+    if icount:
+        print(f"CPU: {cpu_model()}; instructions per ray under callgrind, medium quality; "
+              "Embree / volley (volley / Embree)\n")
+        print("| scene | rays | 1-wide | 16-wide | stream |")
+        print("|---|---|---|---|---|")
+    else:
+        print(f"CPU: {cpu_model()}, {os.cpu_count()} cores; one thread; R = {R} repetitions per engine, mode and quality\n")
+        print("| scene | rays | Embree best Mrays/s (call, quality) | volley best Mrays/s (mode, quality) | volley / Embree |"
+              " nodes/ray | leaves/ray | triangles/ray | agreement | volley medium / high |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
     for name, scene in SCENES:
         if only and name not in only:
             continue
@@ -65,6 +126,9 @@ def main():
             rays = os.path.join(RAYS, f"{name}_{workload}.vray")
             if not os.path.exists(rays):
                 run([f"{B}/volley", "rays", scene, "--scenes", SCENES_DIR, "--workload", workload, "-o", rays])
+            if icount:
+                count(name, scene, workload, rays)
+                continue
             embree, volley, agreement = (0.0, ""), (0.0, ""), 1.0
             volley_at = {}  # volley's best per quality
             for quality in ("medium", "high"):

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """ctest perf.tools: unit tests of the regression tooling itself (perf/volley_perf.py and
-perf/compare) on hand-made result files: the Mann-Whitney U test against exact values,
+perf/compare, embree_best.py's callgrind reading) on hand-made inputs: the Mann-Whitney U test against exact values,
 the thresholds file, compare's verdicts, accuracy reporting and exit codes."""
 import itertools
 import json
@@ -14,6 +14,7 @@ from pathlib import Path
 PERF = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(PERF))
 import volley_perf as vp  # noqa: E402
+import embree_best as eb  # noqa: E402
 
 
 def brute_force_p(x, y):
@@ -219,6 +220,31 @@ class History(unittest.TestCase):
             self.assertEqual(rows[0]["value"], "2")
             self.assertEqual(rows[0]["dirty"], "1")
             self.assertEqual(rows[0]["reps"], "3")
+
+
+class EmbreeIcount(unittest.TestCase):
+    """embree_best.py's ICOUNT mode: the entries' costs read from callgrind_annotate."""
+
+    ANNOTATED = """\
+--------------------------------------------------------------------------------
+Ir                     file:function
+--------------------------------------------------------------------------------
+1,294,071,271 (100.0%)  PROGRAM TOTALS
+  149,971,220 (11.59%)  ???:volley::Accel::occluded(volley::Ray const&) const [/b/volley_vs_embree]
+  139,458,892 (10.78%)  ???:rtcOccluded1 [/usr/lib/x86_64-linux-gnu/libembree3.so.3.13.5]
+   97,000,000 ( 7.50%)  src/a.cpp:volley::f(float [3]) const [/b/volley_vs_embree]
+      500,000 ( 0.04%)  ???:rtcOccluded1 [/other/copy.so]
+"""
+
+    def test_inclusive_costs(self):
+        costs = eb.inclusive_costs(self.ANNOTATED)
+        self.assertEqual(costs["rtcOccluded1"], 139458892)  # the first listing kept
+        self.assertEqual(costs["volley::Accel::occluded(volley::Ray const&) const"], 149971220)
+        self.assertEqual(costs["volley::f(float [3]) const"], 97000000)
+        self.assertNotIn("PROGRAM TOTALS", costs)
+        self.assertEqual(eb.entry_cost(costs, eb.VOLLEY_ENTRY["occluded1"]), 149971220)
+        with self.assertRaises(SystemExit):
+            eb.entry_cost(costs, "rtcIntersect1")
 
 
 if __name__ == "__main__":
