@@ -25,6 +25,7 @@ workload under callgrind (kitchen and Sponza longest).
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -82,7 +83,7 @@ def inclusive_costs(annotated):
 
 
 def entry_cost(costs, name):
-    """The cost of function `name` (a C function matches by its bare name)."""
+    """The cost of function `name`: a C function's bare name, a C++ one's whole signature."""
     if name in costs:
         return costs[name]
     sys.exit(f"embree_best: no callgrind cost for {name}")
@@ -109,6 +110,8 @@ def main():
     only = set(filter(None, os.environ.get("ONLY", "").split(",")))
     os.makedirs(RAYS, exist_ok=True)
     icount = os.environ.get("ICOUNT", "0") == "1"
+    if icount and not (shutil.which("valgrind") and shutil.which("callgrind_annotate")):
+        sys.exit("embree_best: ICOUNT=1 needs valgrind and callgrind_annotate (apt-get install valgrind)")
     if icount:
         print(f"CPU: {cpu_model()}; instructions per ray under callgrind, medium quality; "
               "Embree / volley (volley / Embree)\n")
