@@ -59,6 +59,16 @@ template <class Arch>
   }
 }
 
+/// The ids of a group of m <= L rays at `group` in a list, L of them: a whole group's where
+/// they lie, a last partial one's copied to `tail`, its empty lanes repeating the first id.
+template <int L>
+[[gnu::always_inline]] inline const std::uint32_t* group_ids(const std::uint32_t* group, std::uint32_t m,
+                                                             std::uint32_t (&tail)[L]) {
+  if (m == static_cast<std::uint32_t>(L)) return group;
+  for (int l = 0; l < L; ++l) tail[l] = l < static_cast<int>(m) ? group[l] : group[0];
+  return tail;
+}
+
 }  // namespace detail
 
 // The walk. Every ray of a list is tested against each child of its node with its own
@@ -130,12 +140,8 @@ void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ra
             const int last = detail::last_block_triangles<WideKernels>(first, blocks);
             for (; k + kStreamLeafLanes <= cur.count; k += L) {
               const std::uint32_t m = cur.count - k < L ? cur.count - k : static_cast<std::uint32_t>(L);
-              const std::uint32_t* ids = lists + cur.begin + k;  // as in the node split below
               alignas(64) std::uint32_t tail[L], halves[L];  // halves: the prepared rays as 32-byte rows
-              if (m < L) {
-                for (int l = 0; l < L; ++l) tail[l] = l < static_cast<int>(m) ? ids[l] : ids[0];
-                ids = tail;
-              }
+              const std::uint32_t* ids = detail::group_ids<L>(lists + cur.begin + k, m, tail);
               const I twice = I::load_unaligned(reinterpret_cast<const std::int32_t*>(ids));
               (twice + twice).store_aligned(reinterpret_cast<std::int32_t*>(halves));
               B ray[8];  // org, tmin, reciprocal direction, tfar
@@ -176,14 +182,8 @@ void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ra
       const std::uint32_t* list = lists + cur.begin;
       for (std::uint32_t g = 0; g < cur.count; g += L) {
         const std::uint32_t m = cur.count - g < L ? cur.count - g : static_cast<std::uint32_t>(L);
-        // A whole group's ids are read where they lie; a last partial one's are copied,
-        // its empty lanes repeating the first id.
         alignas(64) std::uint32_t tail[L];
-        const std::uint32_t* ids = list + g;
-        if (m < L) {
-          for (int l = 0; l < L; ++l) tail[l] = l < static_cast<int>(m) ? list[g + l] : list[g];
-          ids = tail;
-        }
+        const std::uint32_t* ids = detail::group_ids<L>(list + g, m, tail);
         const I idx = I::load_unaligned(reinterpret_cast<const std::int32_t*>(ids));
         B ray[8];  // org, tmin, reciprocal direction, tfar
         detail::load_rays<Arch>(data, ids, ray);
