@@ -4,18 +4,25 @@ PRESET ?= release
 BUILD  := build/$(PRESET)
 JOBS   ?= $(shell nproc)
 
-# Required to build (the Python package and its tests included); the optional ones enable
-# the Embree side-by-side, plots, instruction-count benchmarks, the perf/ scripts (python3)
-# and the Dask example (python3-distributed).
-DEPS     := cmake g++ make pkg-config libxsimd-dev libbenchmark-dev libglm-dev libstb-dev \
-            doctest-dev libtinyobjloader-dev nlohmann-json3-dev libtbb-dev libcli11-dev \
-            python3-dev python3-numpy pybind11-dev python3-pytest
-OPTIONAL := libembree-dev gnuplot-nox valgrind python3 python3-distributed
+# What `make demo` needs: the library and the volley command. `make test` (and bench,
+# perf) also need the test, benchmark and Python packages; the optional ones enable the
+# Embree side-by-side, plots, instruction-count benchmarks, the perf/ scripts and the Dask
+# example (python3-distributed).
+DEMO_DEPS := cmake g++ make pkg-config libxsimd-dev libglm-dev libstb-dev libtinyobjloader-dev \
+             nlohmann-json3-dev libtbb-dev libcli11-dev
+DEPS      := $(DEMO_DEPS) libbenchmark-dev doctest-dev python3-dev python3-numpy pybind11-dev python3-pytest
+OPTIONAL  := libembree-dev gnuplot-nox valgrind python3 python3-distributed
 # The sanitizer builds and the fuzzers use clang with its runtimes and libFuzzer.
 SANITIZER_DEPS := clang libclang-rt-14-dev libfuzzer-14-dev
+# Warnings are errors in CI (CI=true), so that a new one fails the run.
+WERROR   ?= $(if $(CI),ON,OFF)
+# Every part on (make test) or only the library and the command (make demo); the library's
+# objects are the same in both, so one build tree serves both.
+ALL_PARTS  := -DVOLLEY_WERROR=$(WERROR) -DVOLLEY_BUILD_TESTS=ON -DVOLLEY_BUILD_BENCH=ON -DVOLLEY_PYTHON=ON
+DEMO_PARTS := -DVOLLEY_WERROR=$(WERROR) -DVOLLEY_BUILD_TESTS=OFF -DVOLLEY_BUILD_BENCH=OFF -DVOLLEY_PYTHON=OFF
 SUDO     := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps deps-sanitizers build test test-asan test-tsan fuzz demo bench perf perf-icount perf-plot clean
+.PHONY: deps deps-demo deps-sanitizers build test test-asan test-tsan fuzz demo bench perf perf-icount perf-plot clean
 
 # Installs the Debian packages of $(1) that are missing.
 define install_missing
@@ -29,11 +36,14 @@ endef
 deps:
 	$(call install_missing,$(DEPS) $(OPTIONAL))
 
+deps-demo:
+	$(call install_missing,$(DEMO_DEPS))
+
 deps-sanitizers: deps
 	$(call install_missing,$(SANITIZER_DEPS))
 
 build: deps
-	cmake --preset $(PRESET)
+	cmake --preset $(PRESET) $(ALL_PARTS)
 	cmake --build --preset $(PRESET) -j $(JOBS)
 
 test: build
@@ -42,7 +52,7 @@ test: build
 # The whole ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer (build/asan)
 # or ThreadSanitizer (build/tsan), clang -O1. README "Testing".
 test-asan test-tsan: test-%: deps-sanitizers
-	cmake --preset $*
+	cmake --preset $* -DVOLLEY_WERROR=$(WERROR)
 	cmake --build --preset $* -j $(JOBS)
 	ctest --preset $* -j $(JOBS)
 
@@ -50,11 +60,14 @@ test-asan test-tsan: test-%: deps-sanitizers
 # (README "Testing"); a crash leaves its input in build/fuzz/artifacts/ and fails.
 FUZZ_SECONDS ?= 60
 fuzz: deps-sanitizers
-	cmake --preset fuzz
+	cmake --preset fuzz -DVOLLEY_WERROR=$(WERROR)
 	cmake --build --preset fuzz -j $(JOBS)
 	fuzz/run_all.sh build/fuzz $(FUZZ_SECONDS)
 
-demo: build
+# The library and the volley command only (no tests, benchmarks or Python), then a render.
+demo: deps-demo
+	cmake --preset $(PRESET) $(DEMO_PARTS)
+	cmake --build --preset $(PRESET) -j $(JOBS) --target volley_cli
 	$(BUILD)/volley render scenes/cornell.json -o out/cornell.png
 
 # Benchmarks and regression tracking (perf/README.md). bench: every suite once, short

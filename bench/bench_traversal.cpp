@@ -101,10 +101,10 @@ std::size_t trace(const Accel& accel, const std::vector<Ray>& rays, std::size_t 
     }
     case Form::stream:
       if (occlusion) {
-        accel.occluded(rays.data() + begin, end - begin, blocked.data());
+        accel.occluded(rays.data() + begin, end - begin, blocked.data(), 1);
         for (std::size_t i = 0; i < end - begin; ++i) count += blocked[i];
       } else {
-        accel.intersect(rays.data() + begin, end - begin, hits.data());
+        accel.intersect(rays.data() + begin, end - begin, hits.data(), 1);
         for (std::size_t i = 0; i < end - begin; ++i) count += hits[i].hit();
       }
       break;

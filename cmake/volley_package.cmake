@@ -121,6 +121,8 @@ install(FILES ${VOLLEY_PACKAGE_DIR}/volley.pc
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig COMPONENT development)
 
 install(TARGETS volley_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT cli)
+# The licence (Apache-2.0) beside the package, as Debian's and pip's layouts put it.
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT development)
 
 if(VOLLEY_BUILD_TESTS)
   # libvolley.so exports the API and nothing else; the second test shows that the check
@@ -131,6 +133,10 @@ if(VOLLEY_BUILD_TESTS)
            COMMAND sh ${PROJECT_SOURCE_DIR}/tests/consumer/check_exports.sh $<TARGET_FILE:TBB::tbb>)
   set_tests_properties("package: export check rejects a library with other symbols" PROPERTIES
     PASS_REGULAR_EXPRESSION "exports symbols outside the API")
+  # One thread rule: every batch call of the C++ API defaults to 0 threads (all cores).
+  file(GLOB VOLLEY_PUBLIC_HEADERS ${PROJECT_SOURCE_DIR}/src/volley/*.h)
+  add_test(NAME "package: every thread-count default of the C++ API is 0 (all cores)"
+           COMMAND sh ${PROJECT_SOURCE_DIR}/tests/consumer/check_thread_defaults.sh ${VOLLEY_PUBLIC_HEADERS})
 
   # Install to a temporary prefix, move it, build tests/consumer against it with
   # find_package(volley), run it (C++ and C, shared and static, README examples) and

@@ -5,7 +5,8 @@ points. LocalCluster runs the workers as processes on this machine; point --sche
 real cluster's address to spread the same job over many (the scene is picklable too, so a
 built one can be sent to workers instead of a path).
 
-    python3 examples/batch_dask.py ../shared/scenes/stanford-bunny.obj ../shared/scenes/dragon_100k.obj
+    python3 examples/batch_dask.py scenes/downloads/stanford-bunny.obj scenes/downloads/dragon_100k.obj
+    (scenes/fetch downloads the meshes; any .obj, .ply or scene .json will do)
 """
 import argparse
 import time

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Ray casting a depth image of a mesh with a pinhole camera, saved as a PNG.
 
-    python3 examples/depth_image.py ../shared/scenes/stanford-bunny.obj -o out/bunny_depth.png
+    python3 examples/depth_image.py scenes/downloads/stanford-bunny.obj -o out/bunny_depth.png
+    (scenes/fetch downloads the meshes; any .obj, .ply or scene .json will do)
 """
 import argparse
 import os

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Occupancy and signed distance of a mesh on a grid, saved as a PNG slice plot.
 
-    python3 examples/sdf_slice.py ../shared/scenes/stanford-bunny.obj -o out/bunny_sdf.png
+    python3 examples/sdf_slice.py scenes/downloads/stanford-bunny.obj -o out/bunny_sdf.png
+    (scenes/fetch downloads the meshes; any .obj, .ply or scene .json will do)
 
 The middle slice of a grid over the mesh's box (widened 10%): left, occupancy (black
 inside); right, signed distance (blue inside, red outside, white on the surface).

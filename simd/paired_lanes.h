@@ -39,9 +39,11 @@ struct GroupLanes<Arch, G> {
   explicit GroupLanes(std::uint32_t act) {
     const __m512i rank = _mm512_maskz_compress_epi32(
         static_cast<__mmask16>(act), _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
-    from = _mm512_permutexvar_epi32(_mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7), rank);
+    // (maskz with every lane: GCC 12's header makes the unmasked forms warn, -Wuninitialized)
+    from = _mm512_maskz_permutexvar_epi32(0xffff, _mm512_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6, 6, 7, 7),
+                                          rank);
   }
-  FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm512_permutexvar_ps(from, v)); }
+  FloatB<Arch> pick(FloatB<Arch> v) const { return FloatB<Arch>(_mm512_maskz_permutexvar_ps(0xffff, from, v)); }
   /// Triangles j and j + 1 of a row: the two floats broadcast as one double, a plain load
   /// (a float pair broadcast takes a shuffle more).
   static FloatB<Arch> broadcast(const float* row) {

@@ -107,7 +107,7 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)
-                       accel.intersect(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.hits.data() + b);
+                       accel.intersect(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.hits.data() + b, 1);
                    }});
 
   modes.push_back({"occluded1", "rtcOccluded1", "occluded(Ray)", true,
@@ -162,7 +162,7 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)
-                       accel.occluded(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.blocked.data() + b);
+                       accel.occluded(rays.data() + b, std::min(kStreamChunk, rays.size() - b), out.blocked.data() + b, 1);
                    }});
   return modes;
 }

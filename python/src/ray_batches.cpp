@@ -59,7 +59,7 @@ void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t 
     uv[2 * i] = hit ? h.u : 0.0f, uv[2 * i + 1] = hit ? h.v : 0.0f;
   }
   if (any_hit) {  // many groups of primary rays miss altogether
-    accel.geometric_normals(hits, m, normals);
+    accel.geometric_normals(hits, m, normals, 1);
     for (std::size_t i = 0; i < 3 * m; ++i) normals[i] = std::isnan(normals[i]) ? 0.0f : normals[i];
   }
   stream_out(out.t_hit + b, t, m * sizeof(float));

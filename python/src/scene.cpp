@@ -164,7 +164,7 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
     py::gil_scoped_release free;
     for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
       Hit hits[kGroup];
-      accel.intersect(group, m, hits);
+      accel.intersect(group, m, hits, 1);
       write_hits(accel, hits, b, m, columns);
     });
   }
@@ -185,7 +185,7 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
     py::gil_scoped_release free;
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
     for_ray_groups(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* group, std::size_t b, std::size_t m) {
-      accel.occluded(group, m, reinterpret_cast<std::uint8_t*>(po + b));
+      accel.occluded(group, m, reinterpret_cast<std::uint8_t*>(po + b), 1);
     });
   }
   return out;
@@ -260,7 +260,7 @@ py::dict RaycastingScene::compute_closest_points(const py::handle& points, int n
       }
       // Open3D's convention: zeros for the normal of nothing found (and, as its cross
       // products give, of a degenerate triangle).
-      accel.geometric_normals(hits, e - b, pn + 3 * b);
+      accel.geometric_normals(hits, e - b, pn + 3 * b, 1);
       for (std::size_t i = 3 * b; i < 3 * e; ++i) pn[i] = std::isnan(pn[i]) ? 0.0f : pn[i];
     });
   }

@@ -209,7 +209,7 @@ struct WideKernels {
  private:
   /// screen() as the packet entry takes it, inlined: called, it cost shadow packets 3.5%
   /// (perf/rays.md, session 25).
-  [[gnu::always_inline]] static void screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
+  [[gnu::always_inline]] inline static void screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
 
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
   /// shear comes from the registers that hold the reciprocal direction (a call to

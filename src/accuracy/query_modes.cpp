@@ -92,7 +92,7 @@ void intersect(const Accel& accel, std::span<const Ray> rays, Mode mode, std::ve
       intersect_packets<16>(accel, rays, hits.data());
       break;
     case Mode::stream:
-      accel.intersect(rays.data(), rays.size(), hits.data());
+      accel.intersect(rays.data(), rays.size(), hits.data(), 1);
       break;
   }
 }
@@ -115,7 +115,7 @@ Answers trace(const Accel& accel, std::span<const Ray> rays, Mode mode) {
       occluded_packets<16>(accel, rays, a);
       break;
     case Mode::stream:
-      accel.occluded(rays.data(), rays.size(), a.occluded.data());
+      accel.occluded(rays.data(), rays.size(), a.occluded.data(), 1);
       break;
   }
   return a;

@@ -180,7 +180,7 @@ Runner register_accuracy(CLI::App& app) {
                          "  volley accuracy                                   # perf/accuracy/\n"
                          "  volley accuracy --test watertight --isa avx2 -o out/acc\n"
                          "  volley accuracy --long                            # perf/accuracy/long.md");
-  cmd->add_option("--scenes", args->scenes, "Folder of the shared meshes (default $VOLLEY_SCENES or ../shared/scenes)");
+  cmd->add_option("--scenes", args->scenes, "Folder of the benchmark meshes (scenes/fetch gets them): default $VOLLEY_SCENES, else ../shared/scenes, else scenes/downloads");
   cmd->add_option("-o,--output", args->output, "Output folder")->capture_default_str();
   cmd->add_option("--test", args->tests, "Triangle tests, comma-separated")
       ->delimiter(',')

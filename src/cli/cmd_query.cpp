@@ -131,7 +131,7 @@ Runner register_query(CLI::App& app) {
                   "Write the answers: .vocc (contains), .vdst (distance, signed-distance), .vclp (closest)");
   cmd->add_option("--max-distance", args->max_distance, "closest: search no farther (default: no limit)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  add_threads_option(*cmd, args->threads);
   cmd->add_option("--reps", args->reps, "Timed repetitions; the best is reported")->check(CLI::Range(1, 1000000))->capture_default_str();
   add_kernel_options(*cmd, args->kernel);
   return [args]() {

@@ -43,8 +43,7 @@ Runner register_rays(CLI::App& app) {
   cmd->add_option("--height", args->height, "Image height in pixels (default: the scene's, else 512)")->check(CLI::Range(2, 16384));
   cmd->add_option("--seed", args->seed, "Random seed of the diffuse directions (default: the scene's)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--threads", args->threads, "Worker threads for tracing the primary hits (default: all cores)")
-      ->check(CLI::Range(1, 1024));
+  add_threads_option(*cmd, args->threads, "Worker threads for tracing the primary hits");
   add_kernel_options(*cmd, args->kernel);
 
   return [args]() {

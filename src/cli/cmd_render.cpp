@@ -49,12 +49,12 @@ Runner register_render(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to a PNG image");
   cmd->add_option("scene", args->scene, "Scene file (.json) or mesh (.obj, .ply)")->required();
-  cmd->add_option("-o,--output", args->output, "Output PNG (default out/<scene name>.png)");
+  cmd->add_option("-o,--output", args->output, "Output PNG (default out/<scene name>.png)")->check(png_path());
   cmd->add_option("--width", args->width, "Image width in pixels (default: the scene's, else 512)")->check(CLI::Range(2, 16384));
   cmd->add_option("--height", args->height, "Image height in pixels (default: the scene's, else 512)")->check(CLI::Range(2, 16384));
   cmd->add_option("--spp", args->spp, "Samples per pixel (stratified jitter when > 1)")->check(CLI::Range(1, 65536));
   cmd->add_option("--max-depth", args->max_depth, "Bounces after the primary hit")->check(CLI::Range(0, 64));
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  add_threads_option(*cmd, args->threads);
   cmd->add_option("--integrator", args->integrator, "whitted (the notes' ray tracer) or path (diffuse interreflection)")
       ->check(CLI::IsMember({"whitted", "path"}));
   cmd->add_option("--seed", args->seed, "Random seed (images are identical for a given seed)")->check(CLI::NonNegativeNumber);

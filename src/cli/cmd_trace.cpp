@@ -230,7 +230,7 @@ Runner register_trace(CLI::App& app) {
   cmd->add_option("--packet", args->packet, "Rays per packet in packet mode")
       ->check(CLI::IsMember({4, 8, 16}))
       ->capture_default_str();
-  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  add_threads_option(*cmd, args->threads);
   cmd->add_flag("--stats", args->stats,
                 "Also count what the single-ray walk visits per ray (interior nodes, leaves, triangles; an\n"
                 "untimed pass; triangles in one layer on a SIMD ISA)");
@@ -253,12 +253,12 @@ Runner register_trace(CLI::App& app) {
     const TraceArgs& a = *args;
     const bool crossings = a.count || a.all;
     if (a.all && a.mode != "single")
-      throw std::invalid_argument("--all traces single rays: leave --mode at single");
+      throw UsageError("--all traces single rays: leave --mode at single");
     if (a.count && a.mode == "packet")
-      throw std::invalid_argument("--count has no packet form: --mode single, stream or batch");
+      throw UsageError("--count has no packet form: --mode single, stream or batch");
     if (a.count && a.mask && a.mode != "single")
-      throw std::invalid_argument("--count with --mask traces single rays: leave --mode at single");
-    if (a.stats && crossings) throw std::invalid_argument("--stats counts the closest-hit or occlusion walk: not with --count or --all");
+      throw UsageError("--count with --mask traces single rays: leave --mode at single");
+    if (a.stats && crossings) throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
     const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel), a.load);

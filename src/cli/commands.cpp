@@ -3,6 +3,8 @@
 #include <utility>
 #include <vector>
 
+#include "cli/common.h"
+
 namespace volley::cli {
 namespace {
 
@@ -32,7 +34,7 @@ void register_commands(CLI::App& app) {
 int run_selected(const CLI::App&) {
   for (auto& [cmd, run] : registry())
     if (cmd->parsed()) return run();
-  return 2;
+  return kExitUsageError;
 }
 
 }  // namespace volley::cli

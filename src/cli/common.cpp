@@ -1,5 +1,7 @@
 #include "cli/common.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <vector>
 
@@ -28,7 +30,23 @@ void add_kernel_options(CLI::App& cmd, KernelArgs& args) {
       ->excludes(fast);
   cmd.add_option(
       "--scenes", args.scenes,
-      "Folder of shared benchmark meshes (${scenes}/ in scene files); default $VOLLEY_SCENES or ../shared/scenes");
+      "Folder of the benchmark meshes (${scenes}/ in scene files; scenes/fetch gets them): default $VOLLEY_SCENES, "
+      "else ../shared/scenes, else scenes/downloads");
+}
+
+void add_threads_option(CLI::App& cmd, int& threads, const std::string& what) {
+  cmd.add_option("--threads", threads, what + ": 0 (the default) for all cores, or a count")->check(CLI::Range(0, 1024));
+}
+
+CLI::Validator png_path() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        std::string ext = std::filesystem::path(path).extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        if (ext == ".png") return {};
+        return "volley writes PNG images only: name the output FILE.png (got \"" + path + "\")";
+      },
+      "FILE.png");
 }
 
 Options kernel_options(const KernelArgs& args) {
@@ -40,7 +58,7 @@ Options kernel_options(const KernelArgs& args) {
   o.reference_double = args.reference;
   if (args.reference && o.isa == Isa::automatic) o.isa = Isa::scalar;
   if (args.reference && o.isa != Isa::scalar)
-    throw Error(
+    throw UsageError(
         "--reference runs the scalar oracle in double precision: use it without --isa (or with --isa "
         "scalar), not with --isa " +
         args.isa);
@@ -60,6 +78,8 @@ std::filesystem::path shared_scenes_dir(const std::string& flag) {
   if (const char* env = std::getenv("VOLLEY_SCENES"); env && *env) return env;
   std::vector<fs::path> candidates = {fs::current_path() / ".." / "shared" / "scenes"};
   if (const auto project = project_dir_of_executable()) candidates.push_back(*project / ".." / "shared" / "scenes");
+  candidates.push_back(fs::current_path() / "scenes" / "downloads");  // where scenes/fetch puts them
+  if (const auto project = project_dir_of_executable()) candidates.push_back(*project / "scenes" / "downloads");
   for (const auto& c : candidates)
     if (fs::is_directory(c)) return fs::weakly_canonical(c);
   return candidates.front();

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli/commands.h"
+#include "cli/common.h"
 #include "core/tsan_one_thread.h"  // (ThreadSanitizer build only)
 #include "io/load_error.h"
 #include "volley/accel.h"
@@ -17,17 +18,24 @@ int main(int argc, char** argv) {
       "camera, light and material). Examples:\n"
       "  volley render scenes/cornell.json -o out/cornell.png --spp 16\n"
       "  volley render scenes/cornell.json --integrator path --spp 64\n"
-      "  volley info ../shared/scenes/sponza_dabrovic.obj"};
+      "  volley info scenes/meshes/sphere.obj\n"
+      "Exit status: 0 done, 1 a runtime error (bad input file, unwritable output), 2 a usage error."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "volley 0.1.0");
   volley::cli::register_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    std::fprintf(stderr, "volley: error: %s\nRun 'volley --help' or 'volley COMMAND --help' for the options.\n",
+                 e.what());
+    return volley::cli::kExitUsageError;
   }
   try {
     return volley::cli::run_selected(app);
+  } catch (const volley::cli::UsageError& e) {
+    std::fprintf(stderr, "volley: error: %s\n", e.what());
+    return volley::cli::kExitUsageError;
   } catch (const volley::io::LoadError& e) {
     std::fprintf(stderr, "volley: error: %s\n", e.what());
   } catch (const volley::Error& e) {
@@ -37,5 +45,5 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "volley: error: %s\n", e.what());
   }
-  return 1;
+  return volley::cli::kExitRuntimeError;
 }

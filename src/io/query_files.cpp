@@ -3,11 +3,17 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 #include "io/load_error.h"
 #include "io/record_file.h"
 
 namespace volley::io {
+
+// Hit records go to and from the file's words by memcpy: Hit has default member values
+// (so it is not trivial), but it is trivially copyable, which is all memcpy needs.
+static_assert(std::is_trivially_copyable_v<Hit>);
+
 namespace {
 
 using record_file::read_records;
@@ -87,7 +93,7 @@ HitLists read_hit_lists(const std::filesystem::path& file) {
   for (std::size_t i = 0; i < rays; ++i)
     if (lists.offsets[i + 1] < lists.offsets[i]) throw LoadError(file, "offset " + std::to_string(i + 1) + " is smaller than the one before");
   lists.hits.resize(hits);
-  if (hits > 0) std::memcpy(lists.hits.data(), words.data() + 2 * (rays + 1), hits * sizeof(Hit));
+  if (hits > 0) std::memcpy(static_cast<void*>(lists.hits.data()), words.data() + 2 * (rays + 1), hits * sizeof(Hit));
   return lists;
 }
 

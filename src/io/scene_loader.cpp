@@ -208,7 +208,8 @@ std::filesystem::path resolve_mesh_file(const std::string& name, const JsonPath&
     const std::filesystem::path path = ctx.shared_scenes_dir / rest;
     if (!std::filesystem::exists(path))
       at.fail("shared mesh \"" + name + "\" not found (looked for " + path.string() +
-              "): pass --scenes DIR or set VOLLEY_SCENES to the folder that holds the shared meshes");
+              "): get the benchmark meshes with scenes/fetch, or pass --scenes DIR or set VOLLEY_SCENES to the "
+              "folder that holds them");
     return path;
   }
   if (name.find("${") != std::string::npos)
@@ -371,6 +372,11 @@ SceneDesc load_json_scene(const std::filesystem::path& file, const std::filesyst
 }  // namespace
 
 SceneDesc load_scene(const std::filesystem::path& file, const std::filesystem::path& shared_scenes_dir) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (!std::filesystem::exists(status)) throw LoadError(file, "file not found");
+  if (std::filesystem::is_directory(status))
+    throw LoadError(file, "is a directory, expected a scene file (.json) or a mesh (.obj, .ply)");
   const std::string ext = lower_extension(file);
   SceneDesc scene;
   if (ext == ".json") {

@@ -52,7 +52,7 @@ void trace_paths(const Accel& accel, TileWork& w) {
     w.rays[i] = w.paths[i].ray;
     w.stats.add(w.paths[i].kind);
   }
-  accel.intersect(w.rays.data(), n, w.hits.data());
+  accel.intersect(w.rays.data(), n, w.hits.data(), 1);
 }
 
 void trace_shadows(const Accel& accel, TileWork& w) {
@@ -62,7 +62,7 @@ void trace_shadows(const Accel& accel, TileWork& w) {
   w.blocked.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) w.rays[i] = w.shadows[i].ray;
   w.stats.add(RayKind::shadow, n);
-  accel.occluded(w.rays.data(), n, w.blocked.data());
+  accel.occluded(w.rays.data(), n, w.blocked.data(), 1);
   for (std::size_t i = 0; i < n; ++i)
     if (!w.blocked[i]) w.sum[w.shadows[i].pixel] += w.shadows[i].contribution;
 }
@@ -78,7 +78,7 @@ void trace_shadows_through(const Scene& scene, TileWork& w) {
     w.hits.assign(n, Hit{});
     for (std::size_t i = 0; i < n; ++i) w.rays[i] = w.shadows[i].ray;
     w.stats.add(RayKind::shadow, n);
-    scene.accel().intersect(w.rays.data(), n, w.hits.data());
+    scene.accel().intersect(w.rays.data(), n, w.hits.data(), 1);
     w.passing.clear();
     for (std::size_t i = 0; i < n; ++i) {
       ShadowQuery q = w.shadows[i];

@@ -196,19 +196,19 @@ class VOLLEY_API Accel {
   /// the top level's walk: perf/instances.md); on AVX2, in a scene of one BVH and with no
   /// masks, two neighbouring occlusion runs as one packet of 32 (docs/kernels.md). The stream walk reorders nothing the caller
   /// sees. Same answers as intersect(ray) per ray.
-  /// `threads`: 1 (the default) traces on the calling thread; 0 on the caller's oneTBB
-  /// arena (all its threads; the default arena otherwise), n > 1 on exactly n threads, in
-  /// pieces of whole runs (at least 1024 rays each), with the same answers. Error for
-  /// threads < 0.
-  void intersect(const Ray* rays, std::size_t count, Hit* hits, int threads = 1) const;
+  /// `threads`, as in every batch call: 0 (the default) on the caller's oneTBB arena (all
+  /// its threads; the default arena otherwise: all cores), 1 on the calling thread alone,
+  /// n > 1 on exactly n threads, in pieces of whole runs (at least 1024 rays each), with the
+  /// same answers. Error for threads < 0.
+  void intersect(const Ray* rays, std::size_t count, Hit* hits, int threads = 0) const;
   /// Occlusion of a stream: blocked[i] = 1 when rays[i] is occluded, else 0. Regrouped as
   /// intersect(rays, count, hits).
-  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, int threads = 1) const;
+  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, int threads = 0) const;
   /// Streams with a mask per ray: masks[i] is rays[i]'s, as intersect(ray, mask). Throws
   /// Error for a null masks with count > 0.
-  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits, int threads = 1) const;
+  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits, int threads = 0) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
-                int threads = 1) const;
+                int threads = 0) const;
 
   // --- Beyond the first hit (docs/crossings.md) -------------------------------------
   // Crossing queries count every surface a ray passes through exactly once: with the
@@ -258,9 +258,9 @@ class VOLLEY_API Accel {
   /// for a miss, for a hit naming nothing here, or for a degenerate triangle. Works on a
   /// committed Accel (built or loaded).
   std::array<float, 3> geometric_normal(const Hit& hit) const;
-  /// geometric_normal for `count` hits, three floats each into `xyz`, on the calling thread
-  /// (threads = 1, the default), the caller's oneTBB arena (0) or an arena of `threads`.
-  void geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads = 1) const;
+  /// geometric_normal for `count` hits, three floats each into `xyz`, on `threads` (the
+  /// batch rule: 0, the default, all of the caller's arena; 1 the calling thread).
+  void geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads = 0) const;
 
   /// Facts about the committed structure.
   AccelInfo info() const;

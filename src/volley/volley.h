@@ -110,7 +110,7 @@ typedef struct volley_ray {
   float tmax;   /**< end of the search interval (exclusive) */
 } volley_ray;
 
-/** A closest-hit answer (16 bytes; the layout of volley::Hit and of a .vhit record).
+/** A closest-hit answer (24 bytes; the layout of volley::Hit and of a .vhit record).
  *  The hit point is org + t * dir = (1 - u - v) p0 + u p1 + v p2 for the triangle's
  *  vertices p0, p1, p2 in the order of its indices. Polygons report u = v = 0. */
 typedef struct volley_hit {

@@ -56,7 +56,7 @@ foreach(h IN LISTS headers)
   endforeach()
 endforeach()
 foreach(f lib/libvolley.a lib/cmake/volley/volleyConfig.cmake lib/cmake/volley/volleyConfigVersion.cmake
-          lib/pkgconfig/volley.pc bin/volley)
+          lib/pkgconfig/volley.pc bin/volley share/doc/volley/LICENSE)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "the installed tree lacks ${f}")
   endif()

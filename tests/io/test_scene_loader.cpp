@@ -7,6 +7,7 @@
 #include "io/io_test_util.h"
 #include "io/load_error.h"
 #include "io/scene_loader.h"
+#include "io/text_file.h"
 
 using volley::io::CameraDesc;
 using volley::io::is_bare_mesh;
@@ -31,34 +32,27 @@ std::string error_of(const std::filesystem::path& scene, const std::filesystem::
 
 const char* kTriangle = R"({"type": "triangles", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]})";
 
-// The complete example of docs_scene_format.md, with mesh paths pointing at test files.
-const char* kExample = R"({
-  "camera": {"eye": [0, 1, 3.5], "look_at": [0, 1, 0], "up": [0, 1, 0], "fov": 40},
-  "render": {"width": 320, "height": 240, "spp": 4, "max_depth": 6, "integrator": "path",
-             "background": [0.05, 0.05, 0.1], "seed": 7},
-  "materials": {
-    "white":  {"diffuse": 0.75, "specular": 0.1, "shininess": 64},
-    "red":    {"ambient": [0.1, 0, 0], "diffuse": [0.6, 0.05, 0.05]},
-    "mirror": {"diffuse": 0.05, "mirror": 0.9},
-    "glass":  {"diffuse": 0, "specular": 0.5, "shininess": 200, "transmittance": 0.95, "ior": 1.5},
-    "lamp":   {"diffuse": 0, "emission": [8, 7, 6]}
-  },
-  "lights": [
-    {"position": [0, 1.9, 0.5], "intensity": [4, 4, 4]},
-    {"position": [2, 3, 3]}
-  ],
-  "objects": [
-    {"type": "mesh", "file": "meshes/tri.obj", "material": "white",
-     "transform": {"scale": 2, "rotate": {"axis": [0, 1, 0], "degrees": 90}, "translate": [0, 0, 5]}},
-    {"type": "mesh", "file": "${scenes}/shared.obj"},
-    {"type": "triangles", "name": "floor", "material": "red",
-     "vertices": [[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]],
-     "indices": [[0, 2, 1], [0, 3, 2]]},
-    {"type": "polygon", "name": "L-shape", "material": "mirror",
-     "vertices": [[-1, 0, -1.5], [0, 0, -1.5], [0, 0.5, -1.5], [-0.5, 0.5, -1.5], [-0.5, 1, -1.5], [-1, 1, -1.5]]},
-    {"type": "polygon", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}
-  ]
-})";
+// The complete example of README.md ("A complete example"), read from there so that it
+// stays valid, with its mesh paths pointing at test files.
+std::string readme_example() {
+  const std::string readme = volley::io::read_text_file(std::string(VOLLEY_SOURCE_DIR) + "/README.md");
+  const std::size_t section = readme.find("### A complete example");
+  REQUIRE(section != std::string::npos);
+  const std::size_t begin = readme.find("```json\n", section) + 8, end = readme.find("```", begin);
+  REQUIRE(end != std::string::npos);
+  return readme.substr(begin, end - begin);
+}
+
+std::string with_test_meshes(std::string json) {
+  const auto swap = [&json](const std::string& from, const std::string& to) {
+    const std::size_t at = json.find(from);
+    REQUIRE(at != std::string::npos);
+    json.replace(at, from.size(), to);
+  };
+  swap("\"meshes/sphere.obj\"", "\"meshes/tri.obj\"");
+  swap("\"${scenes}/CornellBox-Original.obj\"", "\"${scenes}/shared.obj\"");
+  return json;
+}
 
 }  // namespace
 
@@ -68,7 +62,7 @@ TEST_CASE("scene: the complete example loads with every field") {
   dir.write("meshes/tri.obj", "v 1 0 0\nv 0 0 0\nv 0 1 0\nf 1 2 3\n");
   shared.write("shared.obj", "mtllib shared.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl gold\nf 1 2 3\n");
   shared.write("shared.mtl", "newmtl gold\nKd 0.8 0.6 0.2\n");
-  const auto file = dir.write("example.json", kExample);
+  const auto file = dir.write("example.json", with_test_meshes(readme_example()));
   const SceneDesc s = load_scene(file, shared.path());
 
   CHECK(s.source == file.string());
@@ -108,10 +102,11 @@ TEST_CASE("scene: the complete example loads with every field") {
 
   // Triangles: mesh (1), shared mesh (1), floor (2), in object order.
   REQUIRE(s.mesh.triangle_count() == 4);
-  CHECK(s.mesh.material == std::vector<std::uint32_t>{0, 5, 1, 1});
-  // Scale 2, then 90 degrees about +y (x → -z), then translate z by 5: (1,0,0) → (0,0,3).
-  CHECK(near(s.mesh.positions[0], glm::vec3(0, 0, 3)));
-  CHECK(near(s.mesh.positions[2], glm::vec3(0, 2, 5)));
+  CHECK(s.mesh.material == std::vector<std::uint32_t>{3, 5, 1, 1});
+  // Scale 0.3, then 90 degrees about +y (x → -z), then translate by (0.4, 0.3, 0.3):
+  // (1,0,0) → (0.4, 0.3, 0), (0,1,0) → (0.4, 0.6, 0.3).
+  CHECK(near(s.mesh.positions[0], glm::vec3(0.4f, 0.3f, 0)));
+  CHECK(near(s.mesh.positions[2], glm::vec3(0.4f, 0.6f, 0.3f)));
   CHECK(s.mesh.indices == std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5, 6, 8, 7, 6, 9, 8});
   CHECK(s.mesh.corner_normals.empty());
 
@@ -121,6 +116,10 @@ TEST_CASE("scene: the complete example loads with every field") {
   CHECK(s.polygons[0].material == 2);
   CHECK(s.polygons[1].name == "objects[4]");
   CHECK(s.polygons[1].material == 6);
+}
+
+TEST_CASE("scene: scenes/example.json is the README's complete example") {
+  CHECK(volley::io::read_text_file(std::string(VOLLEY_SOURCE_DIR) + "/scenes/example.json") == readme_example());
 }
 
 TEST_CASE("scene: the notes' camera, grey colours, defaults, a polygon-only scene") {
@@ -333,7 +332,8 @@ TEST_CASE("scene: validation errors name the file and the JSON path") {
       {"shared mesh missing", obj_with + R"({"type": "mesh", "file": "${scenes}/nope.obj"}]})",
        "objects[0].file: shared mesh \"${scenes}/nope.obj\" not found (looked for " +
            (shared.path() / "nope.obj").string() +
-           "): pass --scenes DIR or set VOLLEY_SCENES to the folder that holds the shared meshes"},
+           "): get the benchmark meshes with scenes/fetch, or pass --scenes DIR or set VOLLEY_SCENES to the folder "
+           "that holds them"},
       {"second object wrong", obj_with + tri + R"(, {"type": "polygon", "vertices": [[0,0,0],[1,0,0],[0,1,"x"]]}]})",
        "objects[1].vertices[2][2]: expected a number, found \"x\""},
   };
