@@ -36,6 +36,7 @@ setup(
     options={"egg_info": {"egg_base": "build"}},  # the metadata beside the other build outputs
     packages=["volley"],
     package_dir={"volley": "python/volley"},
+    package_data={"volley": ["py.typed", "*.pyi"]},  # the type stub (PEP 561)
     ext_modules=[Extension("volley._volley", sources=[])],
     cmdclass={"build_ext": CMakeBuild},
 )

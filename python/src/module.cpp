@@ -53,14 +53,16 @@ PYBIND11_MODULE(_volley, m) {
         "Reads a mesh (.obj, .ply) or scene (.json) with volley's loaders: (vertices (N, 3) float32, triangles (M, 3) uint32).");
 
   const float inf = std::numeric_limits<float>::infinity();
-  py::class_<RaycastingScene, std::shared_ptr<RaycastingScene>>(m, "RaycastingScene", R"doc(
-Ray casting and point queries on triangle meshes, with Open3D's RaycastingScene API:
+  // The engine under volley.RaycastingScene (python/volley/raycasting_scene.py, which gives
+  // it Open3D's exact surface: keywords, overloads, signatures and docstrings).
+  py::class_<RaycastingScene, std::shared_ptr<RaycastingScene>>(m, "Engine", R"doc(
+The engine of volley.RaycastingScene (use that class): ray casting and point queries on triangle meshes, with Open3D's RaycastingScene API:
 add meshes, then cast rays or query points; the scene builds itself before the first query
 after a change. Rays are arrays (..., 6) of origin and direction, points (..., 3), of any
 real dtype (converted to float32 once). Misses: t_hit inf, ids INVALID_ID. Batch calls
 release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
-      .def(py::init<const std::string&, const std::string&, const std::string&>(), py::arg("test") = "watertight",
-           py::arg("isa") = "auto", py::arg("quality") = "medium",
+      .def(py::init<const std::string&, const std::string&, const std::string&, int>(), py::arg("test") = "watertight",
+           py::arg("isa") = "auto", py::arg("quality") = "medium", py::arg("build_threads") = 0,
            "test: 'watertight' (default), 'moller' or 'plane'; isa: 'auto', 'scalar', 'sse4.2', 'avx2', 'avx512'; "
            "quality: 'medium' (binned SAH, default) or 'high' (also spatial splits: slower to build, faster rays "
            "where triangles are long; medium's answers but for ties that rounding decides)")
@@ -90,6 +92,7 @@ release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
            "Distance, negative inside (one ray's crossing parity; nsamples is accepted for Open3D's API and not needed).")
       .def("compute_occupancy", &RaycastingScene::compute_occupancy, py::arg("query_points"), py::arg("nthreads") = 0,
            py::arg("nsamples") = 1, "1.0 inside, 0.0 outside (float32), by one ray's crossing parity.")
+      .def("geometry_count", &RaycastingScene::geometry_count, "Geometries added (ids 0 to count - 1).")
       .def("info", &RaycastingScene::info, "Facts about the built structure (triangles, nodes, bytes, ISA, ...).")
       .def("save", &RaycastingScene::save, py::arg("path"), "Writes the built structure (RaycastingScene.load maps it back).")
       .def_static("load", &RaycastingScene::load, py::arg("path"))

@@ -68,7 +68,10 @@ BuildQuality parse_quality(const std::string& s) {
 
 }  // namespace
 
-RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality) {
+RaycastingScene::RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality,
+                                 int build_threads)
+    : build_threads_(build_threads) {
+  check_threads(build_threads);
   options_.test = parse_test(test);
   options_.isa = parse_isa_name(isa);
   options_.quality = parse_quality(quality);
@@ -144,7 +147,9 @@ void RaycastingScene::enable_geometry(std::uint32_t geometry) {
 
 const Accel& RaycastingScene::committed() {
   if (dirty_) {
-    accel_.commit(options_);
+    // commit builds on the arena it is called in: all cores, or an arena of build_threads_.
+    if (build_threads_ > 0) accel::arena_of(build_threads_).execute([&] { accel_.commit(options_); });
+    else accel_.commit(options_);
     dirty_ = false;
   }
   return accel_;

@@ -20,8 +20,10 @@ class RaycastingScene {
  public:
   /// `test`: "watertight" (default), "moller" or "plane"; `isa`: "auto" (default), "scalar",
   /// "sse4.2", "avx2" or "avx512"; `quality`: "medium" (default) or "high" (spatial splits).
-  /// ValueError for another name.
-  RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality = "medium");
+  /// ValueError for another name. `build_threads`: the threads that build the structure
+  /// (0: all cores; Open3D's constructor argument nthreads).
+  RaycastingScene(const std::string& test, const std::string& isa, const std::string& quality = "medium",
+                  int build_threads = 0);
 
   std::uint32_t add_triangles(const py::handle& vertices, const py::handle& triangles);
   std::uint32_t add_instance(const std::shared_ptr<RaycastingScene>& prototype, const py::handle& transform);
@@ -40,6 +42,7 @@ class RaycastingScene {
   py::array compute_occupancy(const py::handle& points, int nthreads, int nsamples);
 
   py::dict info();
+  std::size_t geometry_count() const { return geometries_.size(); }
   void save(const std::string& path);
   static std::shared_ptr<RaycastingScene> load(const std::string& path);
   /// Pickling: the options and every geometry's arrays (the structure is rebuilt).
@@ -61,6 +64,7 @@ class RaycastingScene {
   void require_geometry(const char* caller, std::uint32_t geometry) const;
 
   Options options_;
+  int build_threads_ = 0;
   Accel accel_;
   bool dirty_ = true;
   bool loaded_ = false;  ///< from load(): geometry arrays unknown here (not picklable)

@@ -3,11 +3,14 @@
     import numpy as np, volley
     scene = volley.RaycastingScene()
     scene.add_triangles(*volley.read_triangle_mesh("bunny.obj"))
-    ans = scene.cast_rays(np.array([[0, 0, 5, 0, 0, -1]], dtype=np.float32))
+    rays = volley.RaycastingScene.create_rays_pinhole(60, [0, 0.1, 0], [0, 0.1, 0.4], [0, 1, 0], 640, 480)
+    ans = scene.cast_rays(rays)
     ans["t_hit"], ans["geometry_ids"], ans["primitive_ids"]
 
-Everything is in the extension module _volley; this package re-exports it.
+Code written for Open3D's o3d.t.geometry.RaycastingScene runs with the import changed and
+.numpy() dropped: the answers are NumPy arrays.
 """
-from ._volley import INVALID_ID, RaycastingScene, __version__, read_triangle_mesh
+from ._volley import INVALID_ID, __version__, read_triangle_mesh
+from .raycasting_scene import RaycastingScene
 
 __all__ = ["INVALID_ID", "RaycastingScene", "read_triangle_mesh", "__version__"]

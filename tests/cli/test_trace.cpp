@@ -118,13 +118,13 @@ TEST_CASE("trace --count on the stream API and --normals: the same answers as si
   CHECK(bytes_of(plain) == bytes_of(with));
 
   r = run("trace " + scene + " --rays " + rays.string() + " --count --mode packet");
-  CHECK(r.status == 1);
+  CHECK(r.status == 2);  // a usage error
   CHECK(has(r.output, "--count has no packet form"));
   r = run("trace " + scene + " --rays " + rays.string() + " --all --mode stream");
-  CHECK(r.status == 1);
+  CHECK(r.status == 2);  // a usage error
   CHECK(has(r.output, "--all traces single rays"));
   r = run("trace " + scene + " --rays " + rays.string() + " --count --mask 1 --mode batch");
-  CHECK(r.status == 1);
+  CHECK(r.status == 2);  // a usage error
   CHECK(has(r.output, "--count with --mask traces single rays"));
   CHECK(run("trace " + scene + " --rays " + rays.string() + " --normals --occluded").status != 0);
   CHECK(run("trace " + scene + " --rays " + rays.string() + " --normals --count").status != 0);
@@ -147,7 +147,7 @@ TEST_CASE("trace --stats: the walk's visits per ray, refused where the walk cann
   CHECK(scalar.status == 1);
   CHECK(has(scalar.output, "walk_counts: only for"));
   const Run crossing = run("trace " + kCornell + " --rays " + primary.string() + " --reps 1 --stats --count");
-  CHECK(crossing.status == 1);
+  CHECK(crossing.status == 2);  // a usage error
   CHECK(has(crossing.output, "--stats counts the closest-hit or occlusion walk"));
 }
 
