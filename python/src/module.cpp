@@ -9,6 +9,7 @@
 
 #include "io/load_error.h"
 #include "io/scene_loader.h"
+#include "files.h"
 #include "scene.h"
 #include "volley/volley.h"
 
@@ -49,6 +50,7 @@ PYBIND11_MODULE(_volley, m) {
     }
   });
 
+  volley::python::bind_files(m);
   m.def("read_triangle_mesh", &read_triangle_mesh, py::arg("path"),
         "Reads a mesh (.obj, .ply) or scene (.json) with volley's loaders: (vertices (N, 3) float32, triangles (M, 3) uint32).");
 
