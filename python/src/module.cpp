@@ -77,13 +77,15 @@ release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
       .def("set_geometry_mask", &RaycastingScene::set_geometry_mask, py::arg("geometry"), py::arg("mask"))
       .def("disable_geometry", &RaycastingScene::disable_geometry, py::arg("geometry"))
       .def("enable_geometry", &RaycastingScene::enable_geometry, py::arg("geometry"))
-      .def("cast_rays", &RaycastingScene::cast_rays, py::arg("rays"), py::arg("nthreads") = 0,
+      .def("cast_rays", &RaycastingScene::cast_rays, py::arg("rays"), py::arg("nthreads") = 0, py::arg("masks") = py::none(),
            "Closest hits: dict of t_hit, geometry_ids, primitive_ids, primitive_uvs, primitive_normals.")
       .def("test_occlusions", &RaycastingScene::test_occlusions, py::arg("rays"), py::arg("tnear") = 0.0f,
-           py::arg("tfar") = inf, py::arg("nthreads") = 0, "Whether anything lies on each ray in [tnear, tfar): bool array.")
+           py::arg("tfar") = inf, py::arg("nthreads") = 0, py::arg("masks") = py::none(), "Whether anything lies on each ray in [tnear, tfar): bool array.")
       .def("count_intersections", &RaycastingScene::count_intersections, py::arg("rays"), py::arg("nthreads") = 0,
+           py::arg("masks") = py::none(),
            "Every surface crossing along each ray, each shared edge or vertex counted once: int32 array.")
       .def("list_intersections", &RaycastingScene::list_intersections, py::arg("rays"), py::arg("nthreads") = 0,
+           py::arg("masks") = py::none(),
            "Every hit: dict of ray_splits (rays + 1), ray_ids, geometry_ids, primitive_ids, primitive_uvs, t_hit.")
       .def("compute_closest_points", &RaycastingScene::compute_closest_points, py::arg("query_points"),
            py::arg("nthreads") = 0,

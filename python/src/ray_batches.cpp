@@ -47,6 +47,21 @@ void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, 
 
 void finish_piece() { _mm_sfence(); }
 
+HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t n, int nthreads) {
+  HitLists lists;
+  lists.offsets.assign(n + 1, 0);
+  parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) lists.offsets[i + 1] = accel.count_intersections(rays[i], masks[i]);
+  });
+  for (std::size_t i = 0; i < n; ++i) lists.offsets[i + 1] += lists.offsets[i];
+  lists.hits.resize(lists.offsets[n]);
+  parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i)
+      accel.intersect_all(rays[i], lists.hits.data() + lists.offsets[i], lists.offsets[i + 1] - lists.offsets[i], masks[i]);
+  });
+  return lists;
+}
+
 void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out) {
   alignas(64) float t[kGroup], uv[2 * kGroup], normals[3 * kGroup] = {};
   alignas(64) std::uint32_t geometry[kGroup], primitive[kGroup];

@@ -55,6 +55,10 @@ void for_ray_groups(const float* rows, std::size_t n, int nthreads, float tnear,
   });
 }
 
+/// Every hit of each of `n` rays through the geometries its mask selects (intersect_all
+/// with one mask per ray): a pass that counts, then one that fills, on nthreads.
+HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t n, int nthreads);
+
 /// cast_rays' answer arrays (Open3D's names).
 struct HitColumns {
   float* t_hit;

@@ -37,16 +37,26 @@ py::array float_per_point(const py::handle& points, int nthreads, const Accel& a
 
 /// A rays argument (..., 6) checked and converted, with its leading shape and row count
 /// (nthreads checked too: every ray query takes both).
+/// With a mask per ray when `masks` is not None (a C-ordered uint32 array of one per ray:
+/// volley/raycasting_scene.py checks the values and the shape).
 struct RaysIn {
   FloatArray rows;
   std::vector<py::ssize_t> lead;
   std::size_t n = 0;
+  IndexArray mask_array;
+  const std::uint32_t* masks = nullptr;
 };
-RaysIn rays_in(const py::handle& rays, int nthreads) {
+RaysIn rays_in(const py::handle& rays, int nthreads, const py::object& masks) {
   check_threads(nthreads);
   RaysIn in;
   in.rows = as_float_rows(rays, "rays", 6, in.lead);
   in.n = rows_of(in.lead);
+  if (!masks.is_none()) {
+    in.mask_array = IndexArray::ensure(masks);
+    if (!in.mask_array || std::size_t(in.mask_array.size()) != in.n)
+      throw py::value_error("masks: expected one uint32 mask per ray (" + std::to_string(in.n) + ")");
+    in.masks = in.mask_array.data();
+  }
   return in;
 }
 
@@ -155,8 +165,8 @@ const Accel& RaycastingScene::committed() {
   return accel_;
 }
 
-py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
-  const RaysIn in = rays_in(rays, nthreads);
+py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const py::object& masks) {
+  const RaysIn in = rays_in(rays, nthreads, masks);
   const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
@@ -169,7 +179,8 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
     py::gil_scoped_release free;
     for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
       Hit hits[kGroup];
-      accel.intersect(group, m, hits, 1);
+      if (in.masks) accel.intersect(group, in.masks + b, m, hits, 1);
+      else accel.intersect(group, m, hits, 1);
       write_hits(accel, hits, b, m, columns);
     });
   }
@@ -179,8 +190,9 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads) {
   return out;
 }
 
-py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads) {
-  const RaysIn in = rays_in(rays, nthreads);
+py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads,
+                                           const py::object& masks) {
+  const RaysIn in = rays_in(rays, nthreads, masks);
   const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
@@ -190,14 +202,16 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
     py::gil_scoped_release free;
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
     for_ray_groups(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* group, std::size_t b, std::size_t m) {
-      accel.occluded(group, m, reinterpret_cast<std::uint8_t*>(po + b), 1);
+      auto* blocked = reinterpret_cast<std::uint8_t*>(po + b);
+      if (in.masks) accel.occluded(group, in.masks + b, m, blocked, 1);
+      else accel.occluded(group, m, blocked, 1);
     });
   }
   return out;
 }
 
-py::array RaycastingScene::count_intersections(const py::handle& rays, int nthreads) {
-  const RaysIn in = rays_in(rays, nthreads);
+py::array RaycastingScene::count_intersections(const py::handle& rays, int nthreads, const py::object& masks) {
+  const RaysIn in = rays_in(rays, nthreads, masks);
   const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
@@ -206,14 +220,15 @@ py::array RaycastingScene::count_intersections(const py::handle& rays, int nthre
   {
     py::gil_scoped_release free;
     for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
-      accel.count_intersections(group, m, counts + b, 1);
+      if (!in.masks) return accel.count_intersections(group, m, counts + b, 1);
+      for (std::size_t i = 0; i < m; ++i) counts[b + i] = accel.count_intersections(group[i], in.masks[b + i]);
     });
   }
   return out;
 }
 
-py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthreads) {
-  const RaysIn in = rays_in(rays, nthreads);
+py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthreads, const py::object& masks) {
+  const RaysIn in = rays_in(rays, nthreads, masks);
   const std::size_t n = in.n;
   const Accel& accel = committed();
   HitLists lists;
@@ -221,7 +236,7 @@ py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthread
     py::gil_scoped_release free;
     std::vector<Ray> all(n);  // the whole batch: intersect_all's C++ form takes it at once
     group_rays(in.rows.data(), n, 0, n, 0.0f, kInf, all.data());
-    lists = accel.intersect_all(all.data(), n, nthreads);
+    lists = in.masks ? masked_hit_lists(accel, all.data(), in.masks, n, nthreads) : accel.intersect_all(all.data(), n, nthreads);
   }
   const auto k = static_cast<py::ssize_t>(lists.hits.size());
   py::array_t<std::uint32_t> splits(static_cast<py::ssize_t>(n + 1)), ray_ids(k), geometry_ids(k), primitive_ids(k);

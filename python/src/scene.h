@@ -32,10 +32,12 @@ class RaycastingScene {
   void disable_geometry(std::uint32_t geometry);
   void enable_geometry(std::uint32_t geometry);
 
-  py::dict cast_rays(const py::handle& rays, int nthreads);
-  py::array test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads);
-  py::array count_intersections(const py::handle& rays, int nthreads);
-  py::dict list_intersections(const py::handle& rays, int nthreads);
+  /// The ray queries; `masks`: None, or one uint32 mask per ray (a ray sees a geometry
+  /// when their masks share a bit).
+  py::dict cast_rays(const py::handle& rays, int nthreads, const py::object& masks);
+  py::array test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads, const py::object& masks);
+  py::array count_intersections(const py::handle& rays, int nthreads, const py::object& masks);
+  py::dict list_intersections(const py::handle& rays, int nthreads, const py::object& masks);
   py::dict compute_closest_points(const py::handle& points, int nthreads);
   py::array compute_distance(const py::handle& points, int nthreads);
   py::array compute_signed_distance(const py::handle& points, int nthreads, int nsamples);

@@ -194,8 +194,9 @@ def test_every_method_has_a_signature_and_a_docstring():
         assert "handle" not in method.__doc__, name
     assert list(inspect.signature(volley.RaycastingScene.compute_occupancy).parameters) == [
         "self", "query_points", "nthreads", "nsamples"]
-    assert list(inspect.signature(volley.RaycastingScene.test_occlusions).parameters) == [
-        "self", "rays", "tnear", "tfar", "nthreads"]
+    occlusions = inspect.signature(volley.RaycastingScene.test_occlusions).parameters
+    assert list(occlusions) == ["self", "rays", "tnear", "tfar", "nthreads", "masks"]  # Open3D's, then volley's
+    assert occlusions["masks"].kind == inspect.Parameter.KEYWORD_ONLY
     init = inspect.signature(volley.RaycastingScene.__init__).parameters
     assert [p.kind for p in init.values()][3:] == [inspect.Parameter.KEYWORD_ONLY] * 3
 
@@ -217,3 +218,36 @@ def test_a_scene_pickles_as_itself():
     np.testing.assert_array_equal(t.cast_rays(DOWN)["t_hit"], s.cast_rays(DOWN)["t_hit"])
     assert t.info()["test"] == "moller"
     assert "1 geometries" in repr(t)
+
+
+def test_ray_masks_in_every_ray_query_select_geometries_as_hiding_them_would():
+    # Box 0 (mask 1) at z in [0, 1], box 1 (mask 2) at z in [2, 3]; rays come down from z = 5.
+    s = volley.RaycastingScene()
+    s.add_triangles(BOX_V, BOX_T)
+    s.add_triangles(BOX_V + [0, 0, 2], BOX_T)
+    s.set_geometry_mask(0, 1)
+    s.set_geometry_mask(1, 2)
+    rays = np.tile(np.array([0.3, 0.6, 5, 0, 0, -1], np.float32), (2, 3, 1))  # (2, 3, 6)
+    masks = np.array([[1, 2, 3], [0, 1, 2]], np.uint32)
+    hits = s.cast_rays(rays, masks=masks)
+    assert hits["geometry_ids"].tolist() == [[0, 1, 1], [s.INVALID_ID, 0, 1]]
+    np.testing.assert_array_equal(hits["t_hit"], [[4, 2, 2], [np.inf, 4, 2]])
+    assert s.test_occlusions(rays, masks=masks).tolist() == [[True, True, True], [False, True, True]]
+    assert s.test_occlusions(rays, tfar=2.5, masks=masks).tolist() == [[False, True, True], [False, False, True]]
+    assert s.count_intersections(rays, masks=masks).tolist() == [[2, 2, 4], [0, 2, 2]]
+    lists = s.list_intersections(rays, nthreads=1, masks=masks)
+    assert lists["ray_splits"].tolist() == [0, 2, 4, 8, 8, 10, 12]
+    assert lists["geometry_ids"].tolist() == [0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 1, 1]
+    np.testing.assert_array_equal(lists["t_hit"][4:8], [2, 3, 4, 5])
+    # Without masks every ray sees everything (the default mask of a ray is all bits).
+    assert s.count_intersections(rays).tolist() == [[4, 4, 4], [4, 4, 4]]
+
+
+def test_ray_masks_out_of_range_or_misshapen_name_the_argument():
+    s = volley.RaycastingScene()
+    s.add_triangles(BOX_V, BOX_T)
+    for bad, why in ((np.array([1, -1]), "values in"), (np.array([1, 2**32]), "values in"),
+                     (np.array([1.0, 2.0]), "integers"), (np.array([1, 2, 3]), "one mask per ray")):
+        for query in (s.cast_rays, s.test_occlusions, s.count_intersections, s.list_intersections):
+            with pytest.raises(ValueError, match="masks: expected " + why):
+                query(DOWN, masks=bad)

@@ -59,6 +59,22 @@ def _check_samples(nsamples):
         raise ValueError(f"nsamples: expected an odd number >= 1 (Open3D's rule), got {nsamples}")
 
 
+def _ray_masks(masks, rays):
+    """None, or `masks` as a C-ordered uint32 array of one mask per ray of `rays` (..., 6)."""
+    if masks is None:
+        return None
+    m = as_array(masks, "masks")
+    if m.dtype.kind not in "iu":
+        raise ValueError(f"masks: expected integers in [0, 2**32 - 1], got dtype {m.dtype}")
+    lead = np.shape(rays)[:-1]
+    if m.shape != lead:
+        raise ValueError(f"masks: expected one mask per ray, shape {lead}, got {m.shape}")
+    if m.size and (int(m.min()) < 0 or int(m.max()) > 0xFFFFFFFF):
+        bad = m[(m < 0) | (m > 0xFFFFFFFF)].reshape(-1)[0]
+        raise ValueError(f"masks: expected values in [0, 2**32 - 1], got {bad}")
+    return np.ascontiguousarray(m, np.uint32)
+
+
 def mesh_arrays(mesh):
     """(vertex positions, triangle indices) of an Open3D mesh, without importing Open3D:
     a tensor TriangleMesh (vertex.positions, triangle.indices) or a legacy one (vertices,
@@ -158,12 +174,14 @@ class RaycastingScene:
         return self._engine.enable_geometry(geometry_id)
 
     # --- Ray queries ----------------------------------------------------------------
-    def cast_rays(self, rays, nthreads=0):
+    def cast_rays(self, rays, nthreads=0, *, masks=None):
         """The closest hit of each ray.
 
         Args:
             rays: (..., 6) origin and direction (not necessarily unit length).
             nthreads: 0 (default) for all cores, or a thread count.
+            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
+                geometries whose mask (set_geometry_mask) shares a bit with its own.
 
         Returns:
             dict of t_hit (...) float32 (inf for a miss; in units of the direction's
@@ -172,9 +190,10 @@ class RaycastingScene:
             (zeros for a miss).
         """
         _check_threads("nthreads", nthreads)
-        return self._engine.cast_rays(as_array(rays, "rays"), nthreads)
+        rays = as_array(rays, "rays")
+        return self._engine.cast_rays(rays, nthreads, _ray_masks(masks, rays))
 
-    def test_occlusions(self, rays, tnear=0.0, tfar=_INF, nthreads=0):
+    def test_occlusions(self, rays, tnear=0.0, tfar=_INF, nthreads=0, *, masks=None):
         """Whether anything lies on each ray between tnear and tfar.
 
         Args:
@@ -183,25 +202,41 @@ class RaycastingScene:
                 direction's length.
             tfar: end of the interval (exclusive).
             nthreads: 0 (default) for all cores, or a thread count.
+            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
+                geometries whose mask (set_geometry_mask) shares a bit with its own.
 
         Returns:
             (...) bool.
         """
         _check_threads("nthreads", nthreads)
-        return self._engine.test_occlusions(as_array(rays, "rays"), float(tnear), float(tfar), nthreads)
+        rays = as_array(rays, "rays")
+        return self._engine.test_occlusions(rays, float(tnear), float(tfar), nthreads, _ray_masks(masks, rays))
 
-    def count_intersections(self, rays, nthreads=0):
+    def count_intersections(self, rays, nthreads=0, *, masks=None):
         """The number of surface crossings along each ray, an edge or vertex shared by
         triangles counted once (with the default watertight test).
+
+        Args:
+            rays: (..., 6) origin and direction.
+            nthreads: 0 (default) for all cores, or a thread count.
+            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
+                geometries whose mask (set_geometry_mask) shares a bit with its own.
 
         Returns:
             (...) int32.
         """
         _check_threads("nthreads", nthreads)
-        return self._engine.count_intersections(as_array(rays, "rays"), nthreads)
+        rays = as_array(rays, "rays")
+        return self._engine.count_intersections(rays, nthreads, _ray_masks(masks, rays))
 
-    def list_intersections(self, rays, nthreads=0):
+    def list_intersections(self, rays, nthreads=0, *, masks=None):
         """Every hit along each ray, nearest first.
+
+        Args:
+            rays: (..., 6) origin and direction.
+            nthreads: 0 (default) for all cores, or a thread count.
+            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
+                geometries whose mask (set_geometry_mask) shares a bit with its own.
 
         Returns:
             dict of ray_splits (rays + 1,) uint32 (ray i's hits are ray_splits[i] to
@@ -209,7 +244,8 @@ class RaycastingScene:
             primitive_uvs (hits, 2) float32 and t_hit (hits,) float32.
         """
         _check_threads("nthreads", nthreads)
-        return self._engine.list_intersections(as_array(rays, "rays"), nthreads)
+        rays = as_array(rays, "rays")
+        return self._engine.list_intersections(rays, nthreads, _ray_masks(masks, rays))
 
     # --- Point queries --------------------------------------------------------------
     def compute_closest_points(self, query_points, nthreads=0):
