@@ -40,24 +40,22 @@ void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, 
 /// Ends a piece's writes: the streamed answers visible to every thread before Python sees them.
 void finish_piece();
 
-/// body(rays, begin, m) for every group of kGroup rows of the n (the last may be shorter),
-/// over nthreads (parallel's rule).
-template <class Body>
-void for_ray_groups(const float* rows, std::size_t n, int nthreads, float tnear, float tfar, Body&& body) {
-  parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
-    Ray rays[kGroup];
-    for (std::size_t g = b; g < e; g += kGroup) {
-      const std::size_t m = std::min(e, g + kGroup) - g;
-      group_rays(rows, n, g, m, tnear, tfar, rays);
-      body(static_cast<const Ray*>(rays), g, m);
-    }
-    finish_piece();
-  });
-}
-
 /// Every hit of each of `n` rays through the geometries its mask selects (intersect_all
 /// with one mask per ray): a pass that counts, then one that fills, on nthreads.
 HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t n, int nthreads);
+
+/// body(rays, begin, m) for every piece of up to kPiece rows, converted at once, over
+/// nthreads: for the calls that hand the kernel a ray array, whose stream walk sorts the
+/// rays of a call among themselves (a group of 16 is too few to sort).
+template <class Body>
+void for_ray_pieces(const float* rows, std::size_t n, int nthreads, float tnear, float tfar, Body&& body) {
+  parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
+    alignas(64) Ray rays[kPiece];
+    group_rays(rows, n, b, e - b, tnear, tfar, rays);
+    body(static_cast<const Ray*>(rays), b, e - b);
+    finish_piece();
+  });
+}
 
 /// cast_rays' answer arrays (Open3D's names).
 struct HitColumns {

@@ -177,11 +177,11 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const 
                            uvs.mutable_data(), normals.mutable_data()};
   {
     py::gil_scoped_release free;
-    for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
-      Hit hits[kGroup];
-      if (in.masks) accel.intersect(group, in.masks + b, m, hits, 1);
-      else accel.intersect(group, m, hits, 1);
-      write_hits(accel, hits, b, m, columns);
+    for_ray_pieces(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* piece, std::size_t b, std::size_t m) {
+      Hit hits[kPiece];
+      if (in.masks) accel.intersect(piece, in.masks + b, m, hits, 1);
+      else accel.intersect(piece, m, hits, 1);
+      for (std::size_t g = 0; g < m; g += kGroup) write_hits(accel, hits + g, b + g, std::min(kGroup, m - g), columns);
     });
   }
   py::dict out;
@@ -201,10 +201,10 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
   {
     py::gil_scoped_release free;
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
-    for_ray_groups(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* group, std::size_t b, std::size_t m) {
+    for_ray_pieces(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* piece, std::size_t b, std::size_t m) {
       auto* blocked = reinterpret_cast<std::uint8_t*>(po + b);
-      if (in.masks) accel.occluded(group, in.masks + b, m, blocked, 1);
-      else accel.occluded(group, m, blocked, 1);
+      if (in.masks) accel.occluded(piece, in.masks + b, m, blocked, 1);
+      else accel.occluded(piece, m, blocked, 1);
     });
   }
   return out;
@@ -219,9 +219,9 @@ py::array RaycastingScene::count_intersections(const py::handle& rays, int nthre
   std::uint32_t* counts = reinterpret_cast<std::uint32_t*>(out.mutable_data());
   {
     py::gil_scoped_release free;
-    for_ray_groups(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* group, std::size_t b, std::size_t m) {
-      if (!in.masks) return accel.count_intersections(group, m, counts + b, 1);
-      for (std::size_t i = 0; i < m; ++i) counts[b + i] = accel.count_intersections(group[i], in.masks[b + i]);
+    for_ray_pieces(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* piece, std::size_t b, std::size_t m) {
+      if (!in.masks) return accel.count_intersections(piece, m, counts + b, 1);
+      for (std::size_t i = 0; i < m; ++i) counts[b + i] = accel.count_intersections(piece[i], in.masks[b + i]);
     });
   }
   return out;
