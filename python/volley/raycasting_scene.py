@@ -59,6 +59,13 @@ def _check_samples(nsamples):
         raise ValueError(f"nsamples: expected an odd number >= 1 (Open3D's rule), got {nsamples}")
 
 
+def _ray_arguments(rays, nthreads, masks):
+    """What every ray query checks and converts: (rays as an array, masks or None)."""
+    _check_threads("nthreads", nthreads)
+    rays = as_array(rays, "rays")
+    return rays, _ray_masks(masks, rays)
+
+
 def _ray_masks(masks, rays):
     """None, or `masks` as a C-ordered uint32 array of one mask per ray of `rays` (..., 6)."""
     if masks is None:
@@ -189,9 +196,8 @@ class RaycastingScene:
             a miss), primitive_uvs (..., 2) float32 and primitive_normals (..., 3) float32
             (zeros for a miss).
         """
-        _check_threads("nthreads", nthreads)
-        rays = as_array(rays, "rays")
-        return self._engine.cast_rays(rays, nthreads, _ray_masks(masks, rays))
+        rays, masks = _ray_arguments(rays, nthreads, masks)
+        return self._engine.cast_rays(rays, nthreads, masks)
 
     def test_occlusions(self, rays, tnear=0.0, tfar=_INF, nthreads=0, *, masks=None):
         """Whether anything lies on each ray between tnear and tfar.
@@ -208,9 +214,8 @@ class RaycastingScene:
         Returns:
             (...) bool.
         """
-        _check_threads("nthreads", nthreads)
-        rays = as_array(rays, "rays")
-        return self._engine.test_occlusions(rays, float(tnear), float(tfar), nthreads, _ray_masks(masks, rays))
+        rays, masks = _ray_arguments(rays, nthreads, masks)
+        return self._engine.test_occlusions(rays, float(tnear), float(tfar), nthreads, masks)
 
     def count_intersections(self, rays, nthreads=0, *, masks=None):
         """The number of surface crossings along each ray, an edge or vertex shared by
@@ -225,9 +230,8 @@ class RaycastingScene:
         Returns:
             (...) int32.
         """
-        _check_threads("nthreads", nthreads)
-        rays = as_array(rays, "rays")
-        return self._engine.count_intersections(rays, nthreads, _ray_masks(masks, rays))
+        rays, masks = _ray_arguments(rays, nthreads, masks)
+        return self._engine.count_intersections(rays, nthreads, masks)
 
     def list_intersections(self, rays, nthreads=0, *, masks=None):
         """Every hit along each ray, nearest first.
@@ -243,9 +247,8 @@ class RaycastingScene:
             ray_splits[i + 1]), ray_ids, geometry_ids, primitive_ids (hits,) uint32,
             primitive_uvs (hits, 2) float32 and t_hit (hits,) float32.
         """
-        _check_threads("nthreads", nthreads)
-        rays = as_array(rays, "rays")
-        return self._engine.list_intersections(rays, nthreads, _ray_masks(masks, rays))
+        rays, masks = _ray_arguments(rays, nthreads, masks)
+        return self._engine.list_intersections(rays, nthreads, masks)
 
     # --- Point queries --------------------------------------------------------------
     def compute_closest_points(self, query_points, nthreads=0):

@@ -207,8 +207,8 @@ struct WideKernels {
   static void screen(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
 
  private:
-  /// screen() as the packet entry takes it, inlined: called, it cost shadow packets 3.5%
-  /// (perf/rays.md, session 25).
+  /// screen() as the packet entry takes it, inlined: a call there is measurable on shadow
+  /// packets (perf/rays.md).
   [[gnu::always_inline]] inline static void screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
 
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
