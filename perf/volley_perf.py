@@ -1,6 +1,7 @@
-"""Shared code of perf/run, perf/compare and perf/plot: the result file format, the
-thresholds file, the Mann-Whitney U test and the history file. Plain python3 (3.9+),
-standard library only. perf/README.md describes the formats.
+"""Shared code of perf/run, perf/compare, perf/steps, perf/noise and perf/plot: the
+machine a result belongs to, the result files (Google Benchmark JSON, and the older
+volley-perf-result/1), the thresholds file, the Mann-Whitney U test and the history.
+Plain python3 (3.9+), standard library only. perf/README.md describes the formats.
 """
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import fnmatch
 import json
 import math
 import os
+import platform
 import re
 import sys
 from dataclasses import dataclass
@@ -18,38 +20,222 @@ PERF_DIR = Path(__file__).resolve().parent
 ROOT = PERF_DIR.parent
 RESULTS_DIR = PERF_DIR / "results"
 BASELINES_DIR = PERF_DIR / "baselines"
-HISTORY = PERF_DIR / "history.csv"
+HISTORY_DIR = PERF_DIR / "history"
 THRESHOLDS = PERF_DIR / "thresholds"
 
 SCHEMA = "volley-perf-result/1"
 HISTORY_FIELDS = ["date", "commit", "dirty", "label", "kind", "benchmark", "isa", "value", "unit",
-                  "reps", "cv", "host", "cpu"]
+                  "reps", "cv", "host", "cpu", "machine"]
+ICOUNT_ISAS = ("avx2", "sse4.2", "scalar")  # what valgrind can run
+
+
+# ---- machines -------------------------------------------------------------------------
+#
+# Timings compare only within one kind of machine. A kind is the CPU model string, its
+# family and model numbers (virtual machines often report only "AMD EPYC", for Zen 3 and
+# Zen 5 alike) and the widest ISA volley runs there.
+
+
+def slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "unknown"
+
+
+def machine_key(cpu_model: str, family: str, model: str, isa: str) -> str:
+    numbers = f"-f{family}m{model}" if family or model else ""
+    return f"{slug(cpu_model)}{numbers}-{slug(isa)}"
+
+
+def this_machine(cpuinfo: str | None = None) -> dict:
+    """CPU model, family, model number, widest ISA and the machine key, from
+    /proc/cpuinfo (or the text given)."""
+    if cpuinfo is None:
+        try:
+            cpuinfo = Path("/proc/cpuinfo").read_text()
+        except OSError:
+            cpuinfo = ""
+
+    def field(name: str) -> str:
+        m = re.search(rf"^{name}\s*:\s*(.*)$", cpuinfo, re.M)
+        return m.group(1).strip() if m else ""
+
+    flags = set(field("flags").split())
+    isa = "avx512" if {"avx512f", "avx512bw", "avx512dq", "avx512vl"} <= flags else \
+        "avx2" if {"avx2", "fma"} <= flags else "sse4.2" if "sse4_2" in flags else "scalar"
+    model_name = field("model name") or platform.processor() or platform.machine()
+    family, model = field("cpu family"), field("model")
+    return {"cpu_model": model_name, "cpu_family": family, "cpu_model_number": model, "cpu_flags_isa": isa,
+            "machine": machine_key(model_name, family, model, isa),
+            "machine_text": f"{model_name}" + (f", family {family} model {model}" if family else "") + f", {isa}"}
+
+
+def result_machine(ctx: dict) -> str:
+    """The machine key of a result's context ('' when it does not say)."""
+    if ctx.get("machine"):
+        return ctx["machine"]
+    if ctx.get("cpu_model"):
+        isa = ctx.get("cpu_flags_isa") or ctx.get("isa", "")
+        return machine_key(ctx["cpu_model"], ctx.get("cpu_family", ""), ctx.get("cpu_model_number", ""),
+                           isa.split()[0] if isa else "")
+    return ""
+
+
+def timing_baseline(machine: str) -> Path:
+    return BASELINES_DIR / machine / "timing.json"
+
+
+def noise_file(machine: str) -> Path:
+    return BASELINES_DIR / machine / "noise.json"
+
+
+def icount_baseline(isa: str = "avx2") -> Path:
+    return BASELINES_DIR / "icount" / f"{isa}.json"
+
+
+def history_file(machine: str) -> Path:
+    return HISTORY_DIR / f"{machine or 'unknown'}.csv"
 
 # ---- result files ---------------------------------------------------------------------
 #
-# {
-#   "schema": "volley-perf-result/1",
-#   "kind": "timing" | "icount",
-#   "context": {...},                      # commit, dirty, compiler, flags, ISA, CPU, scenes
-#   "benchmarks": {
-#     NAME: {"label": ISA, "metric": "items_per_second" | "cpu_time_ns" | "instructions",
-#            "higher_is_better": bool,
-#            "values": [one per repetition],   # the compared figure
-#            "unit": "items/s" | "ns" | "instr/iteration",
-#            "counters": {NAME: number},       # the benchmark's user counters (mean)
-#            ... kind-specific detail (times, iterations, instructions per item) ...,
-#            "error": "message" only when the benchmark was skipped}
-#   },
-#   "accuracy": {GROUP: {METRIC: number or string}}   # optional; any change is reported
-# }
+# Stored results and baselines are Google Benchmark JSON, as volley_bench writes it with
+# --benchmark_out_format=json (every repetition, then the aggregates), so that Google
+# Benchmark's compare.py reads them. volley's facts sit in the context block:
+#
+#   "context": {...Google Benchmark's own keys...,
+#               "volley": {"kind": "timing" | "icount", "commit": ..., "dirty": ...,
+#                          "machine": KEY, "cpu_model": ..., "flags": {...}, "scenes": {...}, ...}}
+#   "accuracy": {GROUP: {METRIC: value}}       (optional; compare.py ignores it)
+#
+# Instruction-count results (perf/run --callgrind) hold one entry per benchmark whose
+# real_time and cpu_time are the instructions of one iteration (time_unit "ns" only
+# because compare.py needs a unit: context.volley.time_fields says so), and the count as
+# the counter "instructions". Results written before (schema volley-perf-result/1) stay
+# readable. Either way, load_result gives the form the tools work on:
+#
+#   {"kind": ..., "context": {volley's facts},
+#    "benchmarks": {NAME: {"label": ISA, "metric": "items_per_second" | "cpu_time_ns" | "instructions",
+#                          "higher_is_better": bool, "values": [one per repetition], "unit": ...,
+#                          "counters": {NAME: mean}, "error": "message" when it was skipped}},
+#    "accuracy": {...}}
+
+ICOUNT_TIME_FIELDS = "instructions per iteration (callgrind), not nanoseconds"
+_GBENCH_FIELDS = {"name", "run_name", "run_type", "family_index", "per_family_instance_index", "repetitions",
+                  "repetition_index", "threads", "iterations", "real_time", "cpu_time", "time_unit", "label",
+                  "items_per_second", "bytes_per_second", "error_occurred", "error_message", "aggregate_name",
+                  "aggregate_unit"}
+_TO_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
 
 def load_result(path: Path) -> dict:
     with open(path) as f:
         data = json.load(f)
-    if data.get("schema") != SCHEMA:
-        raise ValueError(f"{path}: not a volley perf result (schema {data.get('schema')!r}, expected {SCHEMA})")
-    return data
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: not a result (a JSON object with a benchmarks list)")
+    if data.get("schema") == SCHEMA:
+        return data
+    if isinstance(data.get("benchmarks"), list):
+        return from_gbench(data)
+    raise ValueError(f"{path}: neither Google Benchmark JSON (a benchmarks list) nor a volley perf result "
+                     f"(schema {data.get('schema')!r})")
+
+
+def from_gbench(gb: dict) -> dict:
+    """The tools' form of a Google Benchmark JSON result (volley's or anyone's)."""
+    gctx = gb.get("context", {}) if isinstance(gb.get("context"), dict) else {}
+    ctx = dict(gctx.get("volley") or {})
+    if not ctx:  # plain Google Benchmark output: keep what it says about the run
+        ctx = {"date": gctx.get("date", ""), "host": gctx.get("host_name", ""),
+               "bench": gctx.get("executable", ""), "kind": "timing"}
+    kind = ctx.get("kind", "timing")
+    benchmarks = icount_benchmarks(gb) if kind == "icount" else timing_benchmarks(gb)
+    return {"schema": SCHEMA, "kind": kind, "context": ctx, "benchmarks": benchmarks,
+            "accuracy": gb.get("accuracy", {})}
+
+
+def _runs(gb: dict) -> dict[str, list[dict]]:
+    """Repetitions per benchmark; a file of aggregates only gives its medians."""
+    runs: dict[str, list[dict]] = {}
+    medians: dict[str, list[dict]] = {}
+    for b in gb.get("benchmarks", []):
+        name = b.get("run_name", b.get("name", ""))
+        if b.get("run_type", "iteration") == "iteration":
+            runs.setdefault(name, []).append(b)
+        elif b.get("aggregate_name") == "median":
+            medians.setdefault(name, []).append(b)
+    for name, rows in medians.items():
+        runs.setdefault(name, rows)
+    return runs
+
+
+def timing_benchmarks(gb: dict) -> dict:
+    """Per benchmark: the repetitions' items/s (or CPU time when it counts no items)."""
+    out: dict[str, dict] = {}
+    for name, rows in _runs(gb).items():
+        e = {"label": rows[0].get("label", ""), "values": [], "cpu_time_ns": [], "real_time_ns": [],
+             "iterations": [], "counters": {}}
+        counters: dict[str, list[float]] = {}
+        for b in rows:
+            if b.get("error_occurred"):
+                e["error"] = b.get("error_message", "error")
+                continue
+            f = _TO_NS.get(b.get("time_unit", "ns"), 1.0)
+            e["cpu_time_ns"].append(b["cpu_time"] * f)
+            e["real_time_ns"].append(b["real_time"] * f)
+            e["iterations"].append(b.get("iterations", 0))
+            if "items_per_second" in b:
+                e["metric"], e["unit"], e["higher_is_better"] = "items_per_second", "items/s", True
+                e["values"].append(b["items_per_second"])
+            else:
+                e["metric"], e["unit"], e["higher_is_better"] = "cpu_time_ns", "ns", False
+                e["values"].append(b["cpu_time"] * f)
+            for k, v in b.items():
+                if k not in _GBENCH_FIELDS and isinstance(v, (int, float)):
+                    counters.setdefault(k, []).append(v)
+        e["counters"] = {k: sum(v) / len(v) for k, v in counters.items()}
+        out[name] = e
+    return out
+
+
+def icount_benchmarks(gb: dict) -> dict:
+    out: dict[str, dict] = {}
+    for name, rows in _runs(gb).items():
+        b = rows[0]
+        if b.get("error_occurred"):
+            out[name] = {"label": b.get("label", ""), "error": b.get("error_message", "error"), "values": []}
+            continue
+        e = {"label": b.get("label", ""), "metric": "instructions", "unit": "instr/iteration",
+             "higher_is_better": False, "values": [b["cpu_time"]], "instructions": b.get("instructions"),
+             "iterations": b.get("iterations", 1), "counters": {}}
+        for k in ("items", "instructions_per_item"):
+            if k in b:
+                e[k] = b[k]
+        for k, v in b.items():
+            if k not in _GBENCH_FIELDS and k not in ("instructions", "items", "instructions_per_item") \
+                    and isinstance(v, (int, float)):
+                e["counters"][k] = v
+        out[name] = e
+    return out
+
+
+def icount_gbench(results: dict, gctx: dict, ctx: dict) -> dict:
+    """Google Benchmark JSON of instruction counts (see above), from perf/run's results."""
+    entries = []
+    for i, (name, e) in enumerate(results.items()):
+        row = {"name": name, "family_index": i, "per_family_instance_index": 0, "run_name": name,
+               "run_type": "iteration", "repetitions": 1, "repetition_index": 0, "threads": 1,
+               "iterations": e.get("iterations", 1), "label": e.get("label", "")}
+        if e.get("error"):
+            row.update(error_occurred=True, error_message=e["error"])
+        else:
+            row.update(real_time=e["values"][0], cpu_time=e["values"][0], time_unit="ns",
+                       instructions=e["instructions"])
+            for k in ("items", "instructions_per_item"):
+                if k in e:
+                    row[k] = e[k]
+            row.update(e.get("counters", {}))
+        entries.append(row)
+    context = {k: v for k, v in gctx.items() if not k.startswith("volley_scene:")}
+    context["volley"] = dict(ctx, kind="icount", time_fields=ICOUNT_TIME_FIELDS)
+    return {"context": context, "benchmarks": entries}
 
 
 def save_json(path: Path, data: dict) -> None:
@@ -220,10 +406,23 @@ def find_rule(rules: list[Rule], kind: str, name: str) -> Rule | None:
 
 
 # ---- history --------------------------------------------------------------------------
+#
+# One CSV per machine in perf/history/ (git-ignored: every run appends to it), one line
+# per benchmark and run: a series per benchmark and machine. The committed record is the
+# baselines and the pictures perf/plot draws from the history.
 
 
-def append_history(result: dict, path: Path = HISTORY) -> int:
-    """Appends one line per benchmark of `result` (its median) to the history CSV."""
+def baseline_for(result: dict) -> Path:
+    """The committed baseline a result is compared with by default: this machine's timing
+    baseline, or the instruction-count baseline of the ISA path it counted."""
+    ctx = result["context"]
+    if result["kind"] == "icount":
+        return icount_baseline(ctx.get("icount_isa", "avx2"))
+    return timing_baseline(result_machine(ctx))
+
+
+def history_rows(result: dict) -> list[dict]:
+    """One history line per benchmark of `result` (its median)."""
     ctx = result["context"]
     rows = []
     for name, b in sorted(result["benchmarks"].items()):
@@ -240,18 +439,28 @@ def append_history(result: dict, path: Path = HISTORY) -> int:
             "kind": result["kind"], "benchmark": name, "isa": b.get("label", ""),
             "value": f"{value:.6g}", "unit": unit, "reps": len(b["values"]),
             "cv": f"{cv(b['values']):.4f}", "host": ctx.get("host", ""), "cpu": ctx.get("cpu_model", ""),
+            "machine": result_machine(ctx),
         })
+    return rows
+
+
+def append_history(result: dict, path: Path | None = None) -> tuple[int, Path]:
+    """Appends `result` to its machine's history (or to `path`); returns (lines, file)."""
+    rows = history_rows(result)
+    path = path or history_file(result_machine(result["context"]))
+    path.parent.mkdir(parents=True, exist_ok=True)
     new_file = not path.exists() or path.stat().st_size == 0
     with open(path, "a", newline="") as f:
         w = csv.DictWriter(f, fieldnames=HISTORY_FIELDS)
         if new_file:
             w.writeheader()
         w.writerows(rows)
-    return len(rows)
+    return len(rows), path
 
 
-def read_history(path: Path = HISTORY) -> list[dict]:
+def read_history(path: Path) -> list[dict]:
+    """The lines of a history file (older files without the machine column included)."""
     if not path.exists():
         return []
     with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+        return [dict(r, machine=r.get("machine") or "") for r in csv.DictReader(f)]

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """ctest perf.tools: unit tests of the regression tooling itself (perf/volley_perf.py and
 perf/compare, embree_best.py's callgrind reading) on hand-made inputs: the Mann-Whitney U test against exact values,
-the thresholds file, compare's verdicts, accuracy reporting and exit codes."""
+the thresholds file, compare's verdicts, accuracy reporting and exit codes, the Google
+Benchmark JSON format, machine keys, per-machine noise and the markdown summary."""
 import itertools
 import json
 import math
@@ -121,12 +122,12 @@ class Compare(unittest.TestCase):
     def tearDown(self):
         self.tmp.cleanup()
 
-    def run_compare(self, base, new):
+    def run_compare(self, base, new, *extra):
         (self.dir / "a.json").write_text(json.dumps(base))
         (self.dir / "b.json").write_text(json.dumps(new))
         out = self.dir / "cmp.json"
         r = subprocess.run([sys.executable, str(PERF / "compare"), str(self.dir / "a.json"), str(self.dir / "b.json"),
-                            "--thresholds", str(self.dir / "thresholds"), "--json", str(out)],
+                            "--thresholds", str(self.dir / "thresholds"), "--json", str(out), "--no-noise", *extra],
                            capture_output=True, text=True)
         rows = {}
         if out.exists():
@@ -208,13 +209,132 @@ class Compare(unittest.TestCase):
         self.assertEqual(status, 2, text)
 
 
+    def test_machines_must_match_for_timing_verdicts(self):
+        base = result("timing", {"tracked/a": [100, 101, 99, 98, 102]}, machine="zen-1-avx2")
+        new = result("timing", {"tracked/a": [50, 51, 49, 48, 52]}, machine="zen-5-avx512")
+        status, rows, text = self.run_compare(base, new)
+        self.assertEqual(status, 0, text)
+        self.assertEqual(rows["tracked/a"]["verdict"], "n/a")
+        self.assertIn("two kinds of machine", text)
+
+    def test_noise_raises_the_threshold(self):
+        base = result("timing", {"tracked/a": [100, 101, 99, 98, 102]}, machine="m")
+        new = result("timing", {"tracked/a": [85, 86, 84, 83, 87]}, machine="m")  # 17.6% more time
+        status, rows, text = self.run_compare(base, new)
+        self.assertEqual(status, 1, text)
+        noise = self.dir / "noise.json"
+        noise.write_text(json.dumps({"benchmarks": {"tracked/a": {"spread": 0.07}}}))
+        args = ["--thresholds", str(self.dir / "thresholds"), "--noise", str(noise)]
+        r = subprocess.run([sys.executable, str(PERF / "compare"), str(self.dir / "a.json"), str(self.dir / "b.json"),
+                            *args], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 0, r.stdout)   # 3 x 7% = 21% > 17.6%: noise on this machine
+        self.assertIn("noise", r.stdout)
+
+    def test_markdown(self):
+        base = result("timing", {"tracked/a": [100, 101, 99, 98, 102], "tracked/b": [100, 101, 99, 100, 102]})
+        new = result("timing", {"tracked/a": [80, 81, 79, 78, 82], "tracked/b": [99, 100, 101, 100, 98]})
+        md = self.dir / "cmp.md"
+        status, _, _ = self.run_compare(base, new, "--markdown", str(md))
+        self.assertEqual(status, 1)
+        text = md.read_text()
+        self.assertIn("**REGRESSION**: tracked/a", text)
+        self.assertIn("| benchmark | old median | new median | change | p | verdict |", text)
+        changed = text.split("<details>")[0]
+        self.assertIn("| `tracked/a` | 100 /s | 80 /s | +25.0% | 0.008 | slower REGRESSION (> 10%) |", changed)
+        self.assertNotIn("tracked/b", changed)   # noise: only in the folded full table
+        self.assertIn("`tracked/b`", text.split("<details>")[1])
+
+
+def gbench_json(values_by_name, context=None, aggregates=True):
+    """Google Benchmark JSON as volley_bench writes it with repetitions (items/s)."""
+    rows = []
+    for f, (name, values) in enumerate(values_by_name.items()):
+        for i, v in enumerate(values):
+            rows.append({"name": name, "family_index": f, "per_family_instance_index": 0, "run_name": name,
+                         "run_type": "iteration", "repetitions": len(values), "repetition_index": i, "threads": 1,
+                         "iterations": 10, "real_time": 1e9 / v, "cpu_time": 1e9 / v, "time_unit": "ns",
+                         "items_per_second": v, "label": "avx2", "hit_rate": 0.5})
+        if aggregates:
+            m = sorted(values)[len(values) // 2]
+            rows.append({"name": name + "_median", "family_index": f, "per_family_instance_index": 0,
+                         "run_name": name, "run_type": "aggregate", "repetitions": len(values), "threads": 1,
+                         "aggregate_name": "median", "aggregate_unit": "time", "iterations": len(values),
+                         "real_time": 1e9 / m, "cpu_time": 1e9 / m, "time_unit": "ns", "items_per_second": m})
+    return {"context": {"date": "2026-12-02T00:00:00+00:00", "host_name": "vm", "executable": "volley_bench",
+                        **(context or {})}, "benchmarks": rows}
+
+
+class GoogleBenchmarkFormat(unittest.TestCase):
+    def test_plain_google_benchmark_json(self):
+        r = vp.from_gbench(gbench_json({"tracked/a": [100.0, 110.0, 90.0]}))
+        b = r["benchmarks"]["tracked/a"]
+        self.assertEqual(r["kind"], "timing")
+        self.assertEqual(sorted(b["values"]), [90.0, 100.0, 110.0])   # repetitions, not the aggregates
+        self.assertEqual(b["counters"], {"hit_rate": 0.5})
+        self.assertEqual(r["context"]["host"], "vm")
+
+    def test_aggregates_only(self):
+        gb = gbench_json({"tracked/a": [100.0, 110.0, 90.0]})
+        gb["benchmarks"] = [x for x in gb["benchmarks"] if x["run_type"] == "aggregate"]
+        self.assertEqual(vp.from_gbench(gb)["benchmarks"]["tracked/a"]["values"], [100.0])
+
+    def test_volley_context_and_icount_round_trip(self):
+        e = {"label": "avx2", "values": [1234.0], "instructions": 1234, "iterations": 1, "items": 10,
+             "instructions_per_item": 123.4, "counters": {"nodes": 7}}
+        gb = vp.icount_gbench({"k/a": e, "k/b": {"label": "avx2", "error": "no such benchmark"}},
+                              {"host_name": "vm", "volley_scene:teapot": "/x"}, {"commit_short": "abc"})
+        self.assertNotIn("volley_scene:teapot", gb["context"])
+        self.assertEqual(gb["benchmarks"][0]["cpu_time"], 1234.0)   # compare.py compares these
+        r = vp.from_gbench(json.loads(json.dumps(gb)))
+        self.assertEqual(r["kind"], "icount")
+        self.assertEqual(r["benchmarks"]["k/a"]["values"], [1234.0])
+        self.assertEqual(r["benchmarks"]["k/a"]["instructions_per_item"], 123.4)
+        self.assertEqual(r["benchmarks"]["k/a"]["counters"], {"nodes": 7})
+        self.assertEqual(r["benchmarks"]["k/b"]["error"], "no such benchmark")
+
+    def test_compare_reads_both_formats(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Path(tmp)
+            (d / "old.json").write_text(json.dumps(result("timing", {"traversal/x": [100, 101, 99, 98, 102]})))
+            (d / "new.json").write_text(json.dumps(gbench_json({"traversal/x": [50.0, 51.0, 49.0, 48.0, 52.0]})))
+            r = subprocess.run([sys.executable, str(PERF / "compare"), str(d / "old.json"), str(d / "new.json"),
+                                "--no-noise", "--json", str(d / "c.json")], capture_output=True, text=True)
+            rows = json.loads((d / "c.json").read_text())["rows"]
+            self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+            self.assertEqual(rows[0]["verdict"], "slower")
+            (d / "bad.json").write_text("[1, 2]")
+            r = subprocess.run([sys.executable, str(PERF / "compare"), str(d / "bad.json"), str(d / "new.json")],
+                               capture_output=True, text=True)
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("bad.json: not a result", r.stderr)
+
+
+class Machines(unittest.TestCase):
+    ZEN5 = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 26\nmodel\t\t: 2\n" \
+           "model name\t: AMD EPYC\nflags\t\t: fpu sse4_2 avx2 fma avx512f avx512bw avx512dq avx512vl\n"
+
+    def test_key(self):
+        m = vp.this_machine(self.ZEN5)
+        self.assertEqual(m["machine"], "amd-epyc-f26m2-avx512")
+        self.assertEqual(m["machine_text"], "AMD EPYC, family 26 model 2, avx512")
+        zen3 = self.ZEN5.replace("26", "25").replace("model\t\t: 2", "model\t\t: 1").replace(
+            " avx512f avx512bw avx512dq avx512vl", "")
+        self.assertEqual(vp.this_machine(zen3)["machine"], "amd-epyc-f25m1-avx2")
+
+    def test_baseline_paths(self):
+        timing = {"kind": "timing", "context": {"machine": "amd-epyc-f26m2-avx512"}}
+        self.assertEqual(vp.baseline_for(timing), vp.BASELINES_DIR / "amd-epyc-f26m2-avx512" / "timing.json")
+        icount = {"kind": "icount", "context": {"icount_isa": "sse4.2"}}
+        self.assertEqual(vp.baseline_for(icount), vp.BASELINES_DIR / "icount" / "sse4.2.json")
+
+
 class History(unittest.TestCase):
     def test_append(self):
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "history.csv"
             r = result("timing", {"x/a": [1.0, 2.0, 3.0]}, date="2026-01-01T00:00:00+00:00", dirty=True)
-            self.assertEqual(vp.append_history(r, path), 1)
-            self.assertEqual(vp.append_history(result("icount", {"x/a": [500.0]}), path), 1)
+            self.assertEqual(vp.append_history(r, path), (1, path))
+            self.assertEqual(vp.append_history(result("icount", {"x/a": [500.0]}), path)[0], 1)
             rows = vp.read_history(path)
             self.assertEqual([row["kind"] for row in rows], ["timing", "icount"])
             self.assertEqual(rows[0]["value"], "2")
