@@ -76,7 +76,8 @@ demo: deps-demo
 # these targets leave `git status` clean.
 #   bench: every suite once, short (1 repetition), against this machine's baseline (no
 #          verdicts from one repetition), then the instruction counts of every ISA path.
-#   perf:  the full timing run (5 repetitions) with verdicts; fails on a tracked regression.
+#   perf:  the full timing run (5 repetitions) with verdicts, then the instruction counts;
+#          fails on a tracked regression.
 #   perf-icount: instruction counts under callgrind, deterministic; fails on a regression.
 #   perf-baseline: records this machine's timing baseline and its noise (perf/baselines/
 #          MACHINE/); perf-icount-baseline: the instruction counts of every ISA path.
@@ -95,6 +96,7 @@ bench: build
 
 perf: build
 	perf/run --build-dir $(BUILD) --compare baseline
+	$(call each_icount_path,--compare baseline)
 
 perf-icount: build
 	$(call each_icount_path,--compare baseline)

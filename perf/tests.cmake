@@ -12,6 +12,10 @@ endif()
 add_test(NAME perf.tools COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/test_tools.py)
 set_tests_properties(perf.tools PROPERTIES LABELS perf TIMEOUT 60)
 
+# The change-point detector on synthetic series and on a recorded history.
+add_test(NAME perf.changepoint COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/test_changepoint.py)
+set_tests_properties(perf.changepoint PROPERTIES LABELS perf TIMEOUT 60)
+
 # perf/ab.sh, the A/B of two volley executables: its refusals and its summary line.
 add_test(NAME perf.ab_script COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_ab_script.py
                                      $<TARGET_FILE:volley_cli>)
@@ -23,9 +27,11 @@ if(VOLLEY_BUILD_BENCH AND benchmark_FOUND)
   add_test(NAME perf.suites_run COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_suites_run.py ${bench})
   add_test(NAME perf.icount_vs_baseline
            COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_icount_baseline.py ${bench})
+  add_test(NAME perf.gbench_compare
+           COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_gbench_compare.py ${bench})
   add_test(NAME perf.synthetic_regression
            COMMAND ${VOLLEY_PYTHON3} ${PROJECT_SOURCE_DIR}/perf/tests/check_synthetic_regression.py ${bench})
-  set_tests_properties(perf.suites_run perf.icount_vs_baseline perf.synthetic_regression PROPERTIES
+  set_tests_properties(perf.suites_run perf.icount_vs_baseline perf.gbench_compare perf.synthetic_regression PROPERTIES
     LABELS perf TIMEOUT 120 SKIP_RETURN_CODE 77)
   # The timing half of the synthetic regression runs alone, so the rest of ctest -j does
   # not compete with it for the cores.

@@ -6,6 +6,7 @@ Plain python3 (3.9+), standard library only. perf/README.md describes the format
 from __future__ import annotations
 
 import csv
+import datetime as dt
 import fnmatch
 import json
 import math
@@ -25,7 +26,7 @@ THRESHOLDS = PERF_DIR / "thresholds"
 
 SCHEMA = "volley-perf-result/1"
 HISTORY_FIELDS = ["date", "commit", "dirty", "label", "kind", "benchmark", "isa", "value", "unit",
-                  "reps", "cv", "host", "cpu", "machine"]
+                  "reps", "cv", "host", "cpu", "machine", "commit_date"]
 ICOUNT_ISAS = ("avx2", "sse4.2", "scalar")  # what valgrind can run
 
 
@@ -439,7 +440,7 @@ def history_rows(result: dict) -> list[dict]:
             "kind": result["kind"], "benchmark": name, "isa": b.get("label", ""),
             "value": f"{value:.6g}", "unit": unit, "reps": len(b["values"]),
             "cv": f"{cv(b['values']):.4f}", "host": ctx.get("host", ""), "cpu": ctx.get("cpu_model", ""),
-            "machine": result_machine(ctx),
+            "machine": result_machine(ctx), "commit_date": ctx.get("commit_date", ""),
         })
     return rows
 
@@ -450,6 +451,15 @@ def append_history(result: dict, path: Path | None = None) -> tuple[int, Path]:
     path = path or history_file(result_machine(result["context"]))
     path.parent.mkdir(parents=True, exist_ok=True)
     new_file = not path.exists() or path.stat().st_size == 0
+    if not new_file:
+        with open(path, newline="") as f:
+            header = next(csv.reader(f), [])
+        if header != HISTORY_FIELDS:  # a file of fewer columns: rewritten with today's
+            old = read_history(path)
+            with open(path, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=HISTORY_FIELDS, extrasaction="ignore")
+                w.writeheader()
+                w.writerows(old)
     with open(path, "a", newline="") as f:
         w = csv.DictWriter(f, fieldnames=HISTORY_FIELDS)
         if new_file:
@@ -463,4 +473,24 @@ def read_history(path: Path) -> list[dict]:
     if not path.exists():
         return []
     with open(path, newline="") as f:
-        return [dict(r, machine=r.get("machine") or "") for r in csv.DictReader(f)]
+        return [dict(r, machine=r.get("machine") or "", commit_date=r.get("commit_date") or "")
+                for r in csv.DictReader(f)]
+
+
+def in_commit_order(rows: list[dict]) -> list[dict]:
+    """History lines in the order of their commits (commit date, then the run's date), as
+    a series is read: a commit measured after a later one still falls in its place. A
+    line without a commit date (older files) is placed by the date of its run."""
+    def key(item: tuple[int, dict]) -> tuple:
+        i, r = item
+        run = _utc(r.get("date", ""))
+        return _utc(r.get("commit_date", "")) or run, run, i
+    return [r for _, r in sorted(enumerate(rows), key=key)]
+
+
+def _utc(stamp: str) -> str:
+    """An ISO 8601 time as a sortable UTC string ('' stays '')."""
+    try:
+        return dt.datetime.fromisoformat(stamp).astimezone(dt.timezone.utc).isoformat()
+    except ValueError:
+        return stamp

@@ -9,6 +9,8 @@ from pathlib import Path
 
 PERF = Path(__file__).resolve().parent.parent
 SKIP = 77  # ctest SKIP_RETURN_CODE
+sys.path.insert(0, str(PERF))
+import volley_perf as vp  # noqa: E402
 
 
 def run_perf(args: list[str], env: dict | None = None) -> subprocess.CompletedProcess:
@@ -36,7 +38,8 @@ def compare(base: Path, new: Path, *extra: str) -> tuple[int, dict]:
 
 
 def load(path: Path) -> dict:
-    return json.loads(path.read_text())
+    """A result (Google Benchmark JSON or the older format) in the tools' form."""
+    return vp.load_result(path)
 
 
 def have_valgrind() -> bool:
