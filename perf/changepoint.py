@@ -147,7 +147,7 @@ def _side_stats(x: list[float], lo: int, tau: int, hi: int) -> tuple[float, floa
     return before, after, change, welch_pvalue(left, right)
 
 
-def detect(values: list[float], runs: list[object] | None = None, *, min_size: int = 3,
+def detect(values: list[float], runs: list[object] | None = None, *, min_size: int = 4,
            max_pvalue: float = 0.001, min_change: float = 0.02) -> list[Step]:
     """Steps in a series of positive values (in time order). `runs`: a key per point
     (commit, label, ...); splits fall only where it changes. Default: every point is a

@@ -34,7 +34,7 @@ ICOUNT_ISAS = ("avx2", "sse4.2", "scalar")  # what valgrind can run
 #
 # Timings compare only within one kind of machine. A kind is the CPU model string, its
 # family and model numbers (virtual machines often report only "AMD EPYC", for Zen 3 and
-# Zen 5 alike) and the widest ISA volley runs there.
+# Zen 5 alike) and the widest ISA volley runs there; VOLLEY_PERF_MACHINE names it instead.
 
 
 def slug(text: str) -> str:
@@ -48,7 +48,8 @@ def machine_key(cpu_model: str, family: str, model: str, isa: str) -> str:
 
 def this_machine(cpuinfo: str | None = None) -> dict:
     """CPU model, family, model number, widest ISA and the machine key, from
-    /proc/cpuinfo (or the text given)."""
+    /proc/cpuinfo (or the text given). VOLLEY_PERF_MACHINE, when set, is the key."""
+    cpuinfo_given = cpuinfo
     if cpuinfo is None:
         try:
             cpuinfo = Path("/proc/cpuinfo").read_text()
@@ -64,9 +65,13 @@ def this_machine(cpuinfo: str | None = None) -> dict:
         "avx2" if {"avx2", "fma"} <= flags else "sse4.2" if "sse4_2" in flags else "scalar"
     model_name = field("model name") or platform.processor() or platform.machine()
     family, model = field("cpu family"), field("model")
+    text = f"{model_name}" + (f", family {family} model {model}" if family else "") + f", {isa}"
+    key = machine_key(model_name, family, model, isa)
+    named = os.environ.get("VOLLEY_PERF_MACHINE", "") if cpuinfo_given is None else ""
+    if named:  # the user's name for a machine the CPU fields cannot tell apart
+        key, text = slug(named), f"{text} (VOLLEY_PERF_MACHINE={named})"
     return {"cpu_model": model_name, "cpu_family": family, "cpu_model_number": model, "cpu_flags_isa": isa,
-            "machine": machine_key(model_name, family, model, isa),
-            "machine_text": f"{model_name}" + (f", family {family} model {model}" if family else "") + f", {isa}"}
+            "machine": key, "machine_text": text}
 
 
 def result_machine(ctx: dict) -> str:
@@ -469,22 +474,24 @@ def append_history(result: dict, path: Path | None = None) -> tuple[int, Path]:
 
 
 def read_history(path: Path) -> list[dict]:
-    """The lines of a history file (older files without the machine column included)."""
+    """The lines of a history file; a column an older or trimmed file lacks reads as ''."""
     if not path.exists():
         return []
     with open(path, newline="") as f:
-        return [dict(r, machine=r.get("machine") or "", commit_date=r.get("commit_date") or "")
-                for r in csv.DictReader(f)]
+        return [{**{k: "" for k in HISTORY_FIELDS}, **{k: v or "" for k, v in r.items()}} for r in csv.DictReader(f)]
 
 
 def in_commit_order(rows: list[dict]) -> list[dict]:
     """History lines in the order of their commits (commit date, then the run's date), as
     a series is read: a commit measured after a later one still falls in its place. A
-    line without a commit date (older files) is placed by the date of its run."""
+    line without a commit date (older files) takes that of another line of its commit,
+    else the date of its run."""
+    dates = {r["commit"]: r["commit_date"] for r in rows if r.get("commit_date")}
+
     def key(item: tuple[int, dict]) -> tuple:
         i, r = item
         run = _utc(r.get("date", ""))
-        return _utc(r.get("commit_date", "")) or run, run, i
+        return _utc(r.get("commit_date") or dates.get(r["commit"], "")) or run, run, i
     return [r for _, r in sorted(enumerate(rows), key=key)]
 
 

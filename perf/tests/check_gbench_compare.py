@@ -6,12 +6,15 @@
   `compare.py benchmarks BASELINE NEW` on a fresh volley_bench result;
 - perf/compare accepts that fresh, native Google Benchmark file;
 - what perf/run writes by default (perf/results/, perf/history/) is git-ignored, so
-  `make bench` and `make perf` leave the tree clean.
+  `make bench` and `make perf` leave the tree clean;
+- on a machine without a timing baseline (VOLLEY_PERF_MACHINE names one), `perf/run
+  --compare baseline` says so in one line and gives no timing verdicts.
 
 Skipped (77) in part when compare.py or scipy is missing.
 
 Usage: check_gbench_compare.py VOLLEY_BENCH
 """
+import os
 import subprocess
 import sys
 import tempfile
@@ -49,6 +52,17 @@ def check_ignored() -> None:
     print("ok: perf/results/ and perf/history/ are git-ignored")
 
 
+def check_no_baseline(bench: str, tmp: Path) -> None:
+    env = dict(os.environ, VOLLEY_PERF_MACHINE="a machine without a baseline")
+    r = subprocess.run([sys.executable, str(PERF / "run"), "--quick", "--quiet", "--no-history", "--bench", bench,
+                        "--filter", FRESH_FILTER, "--out", str(tmp / "other.json"), "--compare", "baseline"],
+                       env=env, capture_output=True, text=True)
+    lines = [line for line in r.stdout.splitlines() if line.strip()]
+    if r.returncode != 0 or len(lines) != 1 or "no timing baseline for this machine" not in lines[0]:
+        fail(f"perf/run --compare baseline on a machine without one (exit {r.returncode}):\n{r.stdout}{r.stderr}")
+    print(f"ok: {lines[0]}")
+
+
 def main() -> int:
     bench = sys.argv[1]
     check_ignored()
@@ -67,6 +81,7 @@ def main() -> int:
         print(r.stdout[-600:])
         if r.returncode not in (0, 1):
             fail(f"perf/compare could not read a native Google Benchmark file (exit {r.returncode}): {r.stderr}")
+        check_no_baseline(bench, Path(tmp))
         python = python_with_scipy()
         if not COMPARE_PY.is_file() or not python:
             print(f"skipped in part: {COMPARE_PY} or scipy not installed (Debian libbenchmark-tools python3-scipy)")

@@ -342,6 +342,16 @@ class History(unittest.TestCase):
             self.assertEqual(rows[0]["reps"], "3")
 
 
+    def test_commit_order(self):
+        rows = [{"commit": "new", "commit_date": "2026-12-02T10:00:00+00:00", "date": "2026-12-02T11:00:00+00:00"},
+                {"commit": "old", "commit_date": "2026-12-01T10:00:00+01:00", "date": "2026-12-02T12:00:00+00:00"},
+                {"commit": "new", "commit_date": "", "date": "2026-12-02T10:30:00+00:00"},   # an older line
+                {"commit": "old", "commit_date": "2026-12-01T10:00:00+01:00", "date": "2026-12-02T11:30:00+00:00"}]
+        ordered = vp.in_commit_order(rows)
+        self.assertEqual([(r["commit"], r["date"][11:16]) for r in ordered],
+                         [("old", "11:30"), ("old", "12:00"), ("new", "10:30"), ("new", "11:00")])
+
+
 class EmbreeIcount(unittest.TestCase):
     """embree_best.py's ICOUNT mode: the entries' costs read from callgrind_annotate."""
 
