@@ -1,8 +1,9 @@
 // libFuzzer target: Accel::load on untrusted structure files. The fuzzer's bytes are the
-// file with its size and checksum fields rewritten to match (else nearly every mutation
-// would stop at the checksum, which the unit tests cover): every check behind it must end
-// in volley::Error, and a file that loads must answer queries (single rays, packets, a
-// stream) and commit again without a fault.
+// file padded with zeros to whole stripes after the header, with its size and checksum
+// fields rewritten to match: else nearly every mutation (most change the size) would stop
+// at the size or checksum check, which the unit tests cover. Every check behind them must
+// end in volley::Error, and a file that loads must answer queries (single rays, packets,
+// a stream) and commit again without a fault.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -40,11 +41,13 @@ void query(const volley::Accel& accel) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace file = volley::accel::file;
   std::vector<std::uint8_t> bytes(data, data + size);
-  if (size >= file::kHeaderBytes && (size - file::kHeaderBytes) % file::kStripe == 0) {
-    const std::uint64_t total = size;
+  if (size >= file::kHeaderBytes) {
+    const std::size_t stripes = (size - file::kHeaderBytes + file::kStripe - 1) / file::kStripe;
+    bytes.resize(file::kHeaderBytes + stripes * file::kStripe, 0);
+    const std::uint64_t total = bytes.size();
     std::memcpy(bytes.data() + offsetof(file::Header, bytes), &total, 8);
     file::Checksum sum;
-    sum.add(bytes.data() + file::kHeaderBytes, size - file::kHeaderBytes);
+    sum.add(bytes.data() + file::kHeaderBytes, bytes.size() - file::kHeaderBytes);
     const std::uint64_t value = sum.value();
     std::memcpy(bytes.data() + offsetof(file::Header, checksum), &value, 8);
   }

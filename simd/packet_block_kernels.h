@@ -217,7 +217,7 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
     // form); a triangle is divided only when it has other candidates. No exit after the
     // edge test: for shadow rays whether some lane passes inside is a coin toss, and the
     // range prefilter, which almost never passes, is the one branch (perf/rays.md,
-    // session 20). sure_hit lanes are prefilter lanes (lo > tmin_lo, hi < upper).
+    // "occlusion without the edge-test branch"). sure_hit lanes are prefilter lanes (lo > tmin_lo, hi < upper).
     [[maybe_unused]] const auto sure = [&] {
       if constexpr (T::kDecision == detail::Decision::quotient)
         return T::sure_range(B::load_aligned(rays.tmin + c), upper);

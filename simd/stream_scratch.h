@@ -18,7 +18,7 @@ inline constexpr std::size_t kStreamBatch = 4096;
 inline constexpr std::uint32_t kStreamSwitchRays = 16;
 /// A closest-hit leaf list of kStreamLeafList rays or more is tested L rays at a time in
 /// lanes while kStreamLeafLanes rays of it are left, the rest ray by ray (perf/rays.md,
-/// session 29: shorter lists lost on the bunny's bounce rays).
+/// "long leaf lists of the stream walk in lanes": shorter lists lost on the bunny's bounce rays).
 inline constexpr std::uint32_t kStreamLeafList = 64;
 inline constexpr std::uint32_t kStreamLeafLanes = 4;
 
