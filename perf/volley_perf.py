@@ -97,6 +97,21 @@ def icount_baseline(isa: str = "avx2") -> Path:
     return BASELINES_DIR / "icount" / f"{isa}.json"
 
 
+NOISE_FACTOR = 3.0  # a timing change must exceed this many run-to-run spreads of its machine
+
+
+def read_noise(path: Path) -> dict[str, float]:
+    """{benchmark: run-to-run spread} of a noise file (perf/noise); {} when there is none."""
+    if not path.is_file():
+        return {}
+    data = json.loads(path.read_text())
+    return {name: float(b["spread"]) for name, b in data.get("benchmarks", {}).items() if "spread" in b}
+
+
+def machine_noise(machine: str) -> dict[str, float]:
+    return read_noise(noise_file(machine))
+
+
 def history_file(machine: str) -> Path:
     return HISTORY_DIR / f"{machine or 'unknown'}.csv"
 
