@@ -4,31 +4,17 @@
 #include <cstddef>
 #include <cstring>
 
-#include <emmintrin.h>
+#include <xmmintrin.h>
 
 namespace volley::python {
 namespace {
-
-/// Copies `bytes` to `to`, past the cache where `to` allows: non-temporal stores of whole
-/// aligned 64-byte lines (the answer arrays are written once and not read here, so reading
-/// their lines in first would only double the memory traffic); the rest as memcpy.
-void stream_out(void* to, const void* from, std::size_t bytes) {
-  char* d = static_cast<char*>(to);
-  const char* s = static_cast<const char*>(from);
-  if (reinterpret_cast<std::uintptr_t>(d) % 64 == 0) {
-    for (; bytes >= 64; bytes -= 64, d += 64, s += 64)
-      for (int k = 0; k < 4; ++k)
-        _mm_stream_si128(reinterpret_cast<__m128i*>(d) + k, _mm_loadu_si128(reinterpret_cast<const __m128i*>(s) + k));
-  }
-  std::memcpy(d, s, bytes);
-}
 
 /// Rays between the rows being converted and the rows asked for from memory.
 constexpr std::size_t kPrefetchRays = 128;
 
 }  // namespace
 
-void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out) {
+void rows_to_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out) {
   // One request per row, spread over the conversion (a burst of them would stall it).
   // A row (o0 o1 o2 d0 d1 d2) becomes (o0 o1 o2 tnear | d0 d1 d2 tfar) by two loads inside
   // the row, two unpacks with a bound and two shuffles.
@@ -44,8 +30,6 @@ void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, 
     _mm_storeu_ps(out[i].dir, _mm_shuffle_ps(hi, far, _MM_SHUFFLE(1, 2, 2, 1)));   // d0 d1 d2 tf
   }
 }
-
-void finish_piece() { _mm_sfence(); }
 
 HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t n, int nthreads) {
   HitLists lists;
@@ -63,25 +47,19 @@ HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32
 }
 
 void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out) {
-  alignas(64) float t[kGroup], uv[2 * kGroup], normals[3 * kGroup] = {};
-  alignas(64) std::uint32_t geometry[kGroup], primitive[kGroup];
-  bool any_hit = false;
+  float* t = out.t_hit + b;
+  std::uint32_t* geometry = out.geometry_ids + b;
+  std::uint32_t* primitive = out.primitive_ids + b;
+  float* uv = out.primitive_uvs + 2 * b;
+  float* normals = out.primitive_normals + 3 * b;
   for (std::size_t i = 0; i < m; ++i) {
     const Hit& h = hits[i];
     const bool hit = h.hit();
-    any_hit |= hit;
     t[i] = h.t, geometry[i] = h.geom, primitive[i] = h.prim;
     uv[2 * i] = hit ? h.u : 0.0f, uv[2 * i + 1] = hit ? h.v : 0.0f;
   }
-  if (any_hit) {  // many groups of primary rays miss altogether
-    accel.geometric_normals(hits, m, normals, 1);
-    for (std::size_t i = 0; i < 3 * m; ++i) normals[i] = std::isnan(normals[i]) ? 0.0f : normals[i];
-  }
-  stream_out(out.t_hit + b, t, m * sizeof(float));
-  stream_out(out.geometry_ids + b, geometry, m * sizeof(std::uint32_t));
-  stream_out(out.primitive_ids + b, primitive, m * sizeof(std::uint32_t));
-  stream_out(out.primitive_uvs + 2 * b, uv, 2 * m * sizeof(float));
-  stream_out(out.primitive_normals + 3 * b, normals, 3 * m * sizeof(float));
+  accel.geometric_normals(hits, m, normals, 1);
+  for (std::size_t i = 0; i < 3 * m; ++i) normals[i] = std::isnan(normals[i]) ? 0.0f : normals[i];
 }
 
 }  // namespace volley::python

@@ -1,6 +1,6 @@
 // How the binding's ray queries walk the caller's rays: rows (ox oy oz dx dy dz) converted
-// group by group into volley's rays just before the kernel needs them, the threads given
-// pieces of whole groups, and the answers written group by group. The caller's arrays
+// piece by piece into volley's rays just before the kernel needs them, the threads given
+// whole pieces, and the answers written piece by piece. The caller's arrays
 // (24 bytes a ray in, up to 32 out) are larger than any cache: spreading their traffic over
 // the tracing, instead of copying whole arrays before and after it, is what keeps the
 // package near the C++ stream API (perf/queries.md).
@@ -19,9 +19,6 @@ inline constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Rays per piece of a batch: the unit handed to a thread (at most 1024 rays a task).
 inline constexpr std::size_t kPiece = 1024;
-/// Rays per group: one packet, whose answers fill whole cache lines of the answer arrays.
-inline constexpr std::size_t kGroup = 16;
-static_assert(kPiece % kGroup == 0, "pieces hold whole groups");
 
 /// body(begin, end) over [0, n) in pieces of at most kPiece: on all cores (nthreads = 0),
 /// this thread alone (1) or an arena of nthreads (Accel's batch rule). Called without the GIL.
@@ -34,11 +31,8 @@ void parallel(std::size_t n, int nthreads, Body&& body) {
 }
 
 /// Rays [b, b + m) of `rows` as volley's rays over [tnear, tfar), into `out`; the rows a
-/// few groups on are asked for from memory meanwhile.
-void group_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out);
-
-/// Ends a piece's writes: the streamed answers visible to every thread before Python sees them.
-void finish_piece();
+/// hundred rows on are asked for from memory meanwhile.
+void rows_to_rays(const float* rows, std::size_t n, std::size_t b, std::size_t m, float tnear, float tfar, Ray* out);
 
 /// Every hit of each of `n` rays through the geometries its mask selects (intersect_all
 /// with one mask per ray): a pass that counts, then one that fills, on nthreads.
@@ -51,9 +45,8 @@ template <class Body>
 void for_ray_pieces(const float* rows, std::size_t n, int nthreads, float tnear, float tfar, Body&& body) {
   parallel(n, nthreads, [&](std::size_t b, std::size_t e) {
     alignas(64) Ray rays[kPiece];
-    group_rays(rows, n, b, e - b, tnear, tfar, rays);
+    rows_to_rays(rows, n, b, e - b, tnear, tfar, rays);
     body(static_cast<const Ray*>(rays), b, e - b);
-    finish_piece();
   });
 }
 
@@ -66,8 +59,10 @@ struct HitColumns {
   float* primitive_normals;
 };
 
-/// The hits of the rays [b, b + m) (m <= kGroup) into `out` in Open3D's conventions: zeros
-/// for the uv and normal of a miss, and for the normal of a degenerate triangle.
+/// The hits of the rays [b, b + m) (one piece) into `out` in Open3D's conventions: zeros
+/// for the uv and normal of a miss, and for the normal of a degenerate triangle. Plain
+/// stores: the piece's lines of the five columns stay in the cache for the next piece's
+/// (non-temporal stores of the five streams stalled on Zen 5, perf/queries.md).
 void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out);
 
 }  // namespace volley::python

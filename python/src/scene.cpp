@@ -178,10 +178,12 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const 
   {
     py::gil_scoped_release free;
     for_ray_pieces(in.rows.data(), n, nthreads, 0.0f, kInf, [&](const Ray* piece, std::size_t b, std::size_t m) {
-      Hit hits[kPiece];
+      // Uninitialised: the stream call writes every hit, misses included.
+      alignas(64) unsigned char storage[kPiece * sizeof(Hit)];
+      Hit* hits = reinterpret_cast<Hit*>(storage);
       if (in.masks) accel.intersect(piece, in.masks + b, m, hits, 1);
       else accel.intersect(piece, m, hits, 1);
-      for (std::size_t g = 0; g < m; g += kGroup) write_hits(accel, hits + g, b + g, std::min(kGroup, m - g), columns);
+      write_hits(accel, hits, b, m, columns);
     });
   }
   py::dict out;
@@ -235,7 +237,7 @@ py::dict RaycastingScene::list_intersections(const py::handle& rays, int nthread
   {
     py::gil_scoped_release free;
     std::vector<Ray> all(n);  // the whole batch: intersect_all's C++ form takes it at once
-    group_rays(in.rows.data(), n, 0, n, 0.0f, kInf, all.data());
+    rows_to_rays(in.rows.data(), n, 0, n, 0.0f, kInf, all.data());
     lists = in.masks ? masked_hit_lists(accel, all.data(), in.masks, n, nthreads) : accel.intersect_all(all.data(), n, nthreads);
   }
   const auto k = static_cast<py::ssize_t>(lists.hits.size());
