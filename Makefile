@@ -50,20 +50,23 @@ build: deps
 test: build
 	ctest --preset $(PRESET) -j $(JOBS)
 
-# The whole ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer (build/asan)
-# or ThreadSanitizer (build/tsan), clang -O1. README "Testing".
+# The whole ctest suite under AddressSanitizer + UndefinedBehaviorSanitizer (build/asan,
+# which also holds the fuzz targets) or ThreadSanitizer (build/tsan), clang -O1. README
+# "Testing".
 test-asan test-tsan: test-%: deps-sanitizers
 	cmake --preset $* -DVOLLEY_WERROR=$(WERROR)
 	cmake --build --preset $* -j $(JOBS)
 	ctest --preset $* -j $(JOBS)
 
 # Each libFuzzer target for FUZZ_SECONDS seconds from its committed seed corpus
-# (README "Testing"); a crash leaves its input in build/fuzz/artifacts/ and fails.
+# (README "Testing"), built in the ASan tree (build/asan, whose libraries carry libFuzzer's
+# coverage: no library is built twice); a crash leaves its input in build/asan/artifacts/
+# and fails.
 FUZZ_SECONDS ?= 60
 fuzz: deps-sanitizers
-	cmake --preset fuzz -DVOLLEY_WERROR=$(WERROR)
+	cmake --preset asan -DVOLLEY_WERROR=$(WERROR)
 	cmake --build --preset fuzz -j $(JOBS)
-	fuzz/run_all.sh build/fuzz $(FUZZ_SECONDS)
+	fuzz/run_all.sh build/asan $(FUZZ_SECONDS)
 
 # The library and the volley command only (no tests, benchmarks or Python), then a render.
 demo: deps-demo

@@ -22,8 +22,8 @@ else()
 endif()
 
 list(APPEND VOLLEY_SANITIZE_FLAGS -fno-omit-frame-pointer -gline-tables-only)
-# The fuzz preset: every library compiled with libFuzzer's coverage instrumentation (the
-# fuzz targets in fuzz/ link libFuzzer itself).
+# The asan preset: every library compiled with libFuzzer's coverage instrumentation too, so
+# that the fuzz targets in fuzz/ (which link libFuzzer itself) share the suite's objects.
 option(VOLLEY_FUZZ "Build the libFuzzer targets in fuzz/ (clang, VOLLEY_SANITIZE=address)" OFF)
 if(VOLLEY_FUZZ)
   add_compile_options(-fsanitize=fuzzer-no-link)
