@@ -197,6 +197,52 @@ void PacketKernels<Arch, Test, K, BW>::intersect_triangle(const PreparedPacket<K
   }
 }
 
+namespace detail {
+
+/// The any-hit test of one chunk of lanes against the triangles of `count` blocks of W,
+/// the last ending at its `last` triangle: the lanes of `act` that some triangle hits in
+/// [tmin, upper). Any hit ends a lane; the chunk ends when every active lane has one.
+/// Uniform: one axis permutation for the packet, known for the whole loop (whose registers
+/// then hold no per-lane permutation), and its rays and triangles in the any-hit form
+/// (WatertightTest::any_hit_uniform). Watertight: lanes surely in [tmin, tmax) hit with no
+/// division (`sure`, as the single-ray form); a triangle is divided only when it has other
+/// candidates. No exit after the edge test: for shadow rays whether some lane passes
+/// inside is a coin toss, and the range prefilter, which almost never passes, is the one
+/// branch (perf/rays.md, "occlusion without the edge-test branch").
+template <class T, bool Uniform, int W, class Block, class Rays, class B, class M, class Sure>
+[[gnu::always_inline]] inline M occluded_chunk(const Rays& r, const Block* blocks, std::uint32_t count, int last,
+                                               const B& upper, const Sure& sure, const M& act) {
+  M hit(false);
+  for (std::uint32_t b = 0; b < count; ++b) {
+    const Block& block = blocks[b];
+    const int used = b + 1 == count ? last : W;
+    for (int j = 0; j < used; ++j) {
+      if constexpr (T::kDecision == Decision::quotient) {
+        const auto tri = [&] {
+          if constexpr (Uniform)
+            return T::any_hit_uniform(block, j, r);
+          else
+            return T::broadcast_tri(block, j, r);
+        }();
+        const auto d = T::template depth<false>(r, tri);
+        const M cand = T::prefilter(r, d, upper) & ~hit;
+        if (xsimd::none(cand)) continue;
+        const M now = T::sure_hit(d, sure) & cand;
+        hit = hit | now;
+        const M rest = cand & ~now;
+        if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
+      } else {
+        const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
+        if (xsimd::any(cand.valid)) hit = hit | confirmed<T>(r, cand, cand_t<T>(cand), upper);
+      }
+    }
+    if (xsimd::all(hit | ~act)) break;
+  }
+  return hit;
+}
+
+}  // namespace detail
+
 template <class Arch, TriangleTest Test, int K, int BW>
 std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>& prepared, const Block* blocks,
                                                          std::uint32_t count, std::uint32_t active, int last) {
@@ -212,12 +258,7 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
     const M act = detail::mask_from_bits<Arch>(act_bits);
     const auto r = T::template load<K>(prepared, c);
     const B upper = xsimd::select(act, B::load_aligned(rays.tmax + c), B(-std::numeric_limits<float>::infinity()));
-    M hit(false);
-    // Watertight: lanes surely in [tmin, tmax) hit with no division (see the single-ray
-    // form); a triangle is divided only when it has other candidates. No exit after the
-    // edge test: for shadow rays whether some lane passes inside is a coin toss, and the
-    // range prefilter, which almost never passes, is the one branch (perf/rays.md,
-    // "occlusion without the edge-test branch"). sure_hit lanes are prefilter lanes (lo > tmin_lo, hi < upper).
+    // (Watertight) sure_hit lanes are prefilter lanes (lo > tmin_lo, hi < upper).
     [[maybe_unused]] const auto sure = [&] {
       if constexpr (T::kDecision == detail::Decision::quotient)
         return T::sure_range(B::load_aligned(rays.tmin + c), upper);
@@ -243,45 +284,12 @@ std::uint32_t PacketKernels<Arch, Test, K, BW>::occluded(const PreparedPacket<K>
         continue;
       }
     }
-    // Any hit ends a lane; the chunk ends when every active lane has one. The last block
-    // ends at its `last` triangle. Uniform: one axis permutation for the packet, known for
-    // the whole loop (whose registers then hold no per-lane permutation), and its rays and
-    // triangles in the any-hit form (WatertightTest::any_hit_uniform).
-    const auto triangles = [&](auto uniform, const typename T::Rays& r) __attribute__((always_inline)) {
-      for (std::uint32_t b = 0; b < count; ++b) {
-        const Block& block = blocks[b];
-        const int used = b + 1 == count ? last : W;
-        for (int j = 0; j < used; ++j) {
-          if constexpr (T::kDecision == detail::Decision::quotient) {
-            const auto tri = [&] {
-              if constexpr (decltype(uniform)::value)
-                return T::any_hit_uniform(block, j, r);
-              else
-                return T::broadcast_tri(block, j, r);
-            }();
-            const auto d = T::template depth<false>(r, tri);
-            const M cand = T::prefilter(r, d, upper) & ~hit;
-            if (xsimd::none(cand)) continue;
-            const M now = T::sure_hit(d, sure) & cand;
-            hit = hit | now;
-            const M rest = cand & ~now;
-            if (xsimd::any(rest)) hit = hit | T::confirm(r, {rest, d.ts, d.u, d.v, d.det}, d.ts / d.det, upper);
-          } else {
-            const auto cand = T::test(r, T::broadcast_tri(block, j, r), upper);
-            if (xsimd::any(cand.valid)) hit = hit | detail::confirmed<T>(r, cand, detail::cand_t<T>(cand), upper);
-          }
-        }
-        if (xsimd::all(hit | ~act)) break;
-      }
-    };
-    if constexpr (T::kDecision == detail::Decision::quotient) {
-      if (r.uniform)
-        triangles(std::true_type{}, T::any_hit_rays(r));
-      else
-        triangles(std::false_type{}, r);
-    } else {
-      triangles(std::false_type{}, r);
-    }
+    M hit;
+    if constexpr (T::kDecision == detail::Decision::quotient)
+      hit = r.uniform ? detail::occluded_chunk<T, true, W>(T::any_hit_rays(r), blocks, count, last, upper, sure, act)
+                      : detail::occluded_chunk<T, false, W>(r, blocks, count, last, upper, sure, act);
+    else
+      hit = detail::occluded_chunk<T, false, W>(r, blocks, count, last, upper, sure, act);
     result |= detail::bits_from_mask<Arch>(hit & act) << c;
   }
   return result;

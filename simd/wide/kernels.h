@@ -260,9 +260,6 @@ struct WideKernels {
   template <class Query, bool Uniform, bool NoZero, class Leaves>
   static std::uint32_t trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                     const detail::PacketSetup<K>& setup, Query& query);
-  /// trace_packet's state and steps (packet_walk.h).
-  template <class Query, bool Uniform, bool NoZero, class Leaves>
-  class PacketWalker;
 };
 
 }  // namespace volley::simd

@@ -104,15 +104,6 @@ struct PacketFamily {
     return V8::le(entry, exit);
   }
 
-  /// Whether the family settles every child of `node` (each entered by all its rays or by
-  /// none, `far_hi` as in maybe()): `all` then the children all its rays enter.
-  [[gnu::always_inline]] bool settles(const WideNode<kWideN>& node, V far_hi, std::uint32_t& all_in) const {
-    V entry;
-    const std::uint32_t may = maybe(node, far_hi, entry);
-    all_in = all(node) & may;
-    return may == all_in;
-  }
-
   /// The children of `node` that every ray of the family enters (see above: not bounded
   /// against rounding), as bits.
   [[gnu::always_inline]] std::uint32_t all(const WideNode<kWideN>& node) const {

@@ -65,22 +65,6 @@ struct PacketLanes {
     exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
   }
 
-  /// slabs() for a chunk whose lanes may lie in different octants: each lane's near and
-  /// far planes picked by the signs of its reciprocal direction, neg[a] (ix, iy, iz < 0).
-  template <class M>
-  [[gnu::always_inline]] void slabs_any_octant(const WideNode<kWideN>& node, int j, const M neg[3], int c, B pad,
-                                               B& entry, B& exit) const {
-    const B lx = (B(node.bounds[0][j]) - ox[c]) * ix[c], hx = (B(node.bounds[1][j]) - ox[c]) * ix[c];
-    const B ly = (B(node.bounds[2][j]) - oy[c]) * iy[c], hy = (B(node.bounds[3][j]) - oy[c]) * iy[c];
-    const B lz = (B(node.bounds[4][j]) - oz[c]) * iz[c], hz = (B(node.bounds[5][j]) - oz[c]) * iz[c];
-    const B tnx = xsimd::select(neg[0], hx, lx), tfx = xsimd::select(neg[0], lx, hx);
-    const B tny = xsimd::select(neg[1], hy, ly), tfy = xsimd::select(neg[1], ly, hy);
-    const B tnz = xsimd::select(neg[2], hz, lz), tfz = xsimd::select(neg[2], lz, hz);
-    // NaN-safe order, as slabs().
-    entry = xsimd::max(tnz, xsimd::max(tny, xsimd::max(tnx, tmin[c])));
-    exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, tfar[c]))) * pad;
-  }
-
   /// The fused form of slabs() (PacketLanes::fuse first): each slab distance is one fused
   /// b inv - c with c = org inv rounded outwards once per packet, the single-ray walk's
   /// form (single_walk.h, where the margin is argued), and the exit padding folded into the
