@@ -8,8 +8,11 @@
 #include "simd/wide/packet_entry.h"
 #include "simd/wide/packet_walk.h"
 #include "simd/wide/point_walk.h"
+#include "simd/wide/packet_queries.h"
 #include "simd/wide/queries.h"
+#include "simd/wide/query_protocol.h"
 #include "simd/wide/single_walk.h"
+#include "simd/wide/stream_queries.h"
 #include "simd/wide/stream_walk.h"
 
 namespace volley::simd {

@@ -9,7 +9,7 @@
 #include "simd/wide/node_lanes.h"
 #include "simd/wide/packet_family.h"
 #include "simd/wide/packet_lanes.h"
-#include "simd/wide/queries.h"
+#include "simd/wide/query_protocol.h"
 #include "simd/wide/stack.h"
 
 namespace volley::simd {

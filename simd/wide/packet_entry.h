@@ -5,12 +5,13 @@
 #include <cstdint>
 
 #include "simd/wide/kernels.h"
-#include "simd/wide/queries.h"
+#include "simd/wide/packet_queries.h"
 
 namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
+  requires detail::PacketQuery<Query, WideKernels<Arch, Test, Robust, PK>, Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays,
                                                                   Query& query) {
   if (bvh.root == wide_ref::kEmptyRef || (rays.active & static_cast<std::uint32_t>((std::uint64_t{1} << K) - 1u)) == 0) return 0;

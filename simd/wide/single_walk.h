@@ -18,6 +18,7 @@ namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
+  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                    Query& query) {
   return trace_ray(bvh, ray, start, query);
@@ -25,6 +26,7 @@ bool WideKernels<Arch, Test, Robust, PK>::trace_single(const WideView<Leaves>& b
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
+  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
                                                  const detail::PacketSetup<K>& setup, int i, std::uint32_t start,
                                                  Query& query) {
@@ -50,6 +52,7 @@ bool WideKernels<Arch, Test, Robust, PK>::trace_lane(const WideView<Leaves>& bvh
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
+  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                 Query& query) {
   if (start == wide_ref::kEmptyRef) return query.answer();

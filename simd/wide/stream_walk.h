@@ -16,7 +16,7 @@
 #include "simd/ray_transpose.h"
 #include "simd/stream_scratch.h"
 #include "simd/wide/compress.h"
-#include "simd/wide/queries.h"
+#include "simd/wide/stream_queries.h"
 #include "simd/wide/stack.h"
 
 namespace volley::simd {
@@ -79,6 +79,7 @@ template <int L>
 // query that asks (kNearFirst), in slot order otherwise.
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query>
+  requires detail::StreamQuery<Query, WideKernels<Arch, Test, Robust, PK>>
 void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query) {
   using B = detail::FloatB<Arch>;
   using I = detail::IntB<Arch>;

@@ -260,6 +260,15 @@ struct Accel::Impl {
   /// chunk; `vertex_total` = the triangle geometries' vertices.
   void read_geometries(accel::file::Reader& in, const accel::file::Meta& meta,
                        std::span<const accel::file::GeometryRecord> records, std::uint64_t& vertex_total);
+  /// save(): the meta chunk of the committed scene.
+  accel::file::Meta meta_record() const;
+  /// save(): a layer's record, its wide BVH's figures from `image`.
+  static accel::file::LayerRecord layer_record(const Layer& l, const accel::WideImage& image);
+  /// load(): the header's options (test, isa, robust, reference_double), checked against
+  /// each other and this CPU.
+  void read_options(accel::file::Reader& in);
+  /// load(): the polygons rebuilt from their outlines (make_polygon checks each again).
+  void read_polygons(accel::file::Reader& in, std::span<const std::uint32_t> sizes, std::span<const float> vertices);
   /// load(): one layer's record, excluded flags, nodes and blocks; its engines.
   void read_layer(accel::file::Reader& in, std::uint32_t mask, const std::shared_ptr<const accel::file::Mapping>& mapping);
   /// Whether triangle i has no area (in double with reference_double).

@@ -49,11 +49,8 @@ void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Me
     in.fail("the geometry table's counts do not match the meta chunk");
 }
 
-void Accel::Impl::load_from(const std::string& path) {
-  namespace file = accel::file;
-  auto mapping = std::make_shared<const file::Mapping>(path);
-  file::Reader in(mapping, path);
-  const file::Header& h = in.header();
+void Accel::Impl::read_options(accel::file::Reader& in) {
+  const accel::file::Header& h = in.header();
   if (h.test > static_cast<std::uint32_t>(TriangleTest::watertight) || h.isa > static_cast<std::uint32_t>(Isa::avx512) ||
       h.isa == static_cast<std::uint32_t>(Isa::automatic) || !is_bool(h.robust) || !is_bool(h.reference_double))
     in.fail("the header's options are not valid");
@@ -65,6 +62,31 @@ void Accel::Impl::load_from(const std::string& path) {
   if (!simd::cpu_has(isa))
     in.fail("built for " + std::string(to_string(isa)) +
             ", which this CPU lacks (build the structure here, or save it with an ISA this CPU has)");
+}
+
+void Accel::Impl::read_polygons(accel::file::Reader& in, std::span<const std::uint32_t> sizes,
+                                std::span<const float> vertices) {
+  std::size_t at = 0;
+  for (const Geometry& g : geometries) {
+    if (!g.polygon) continue;
+    const std::uint32_t n = sizes[polygons.size()];
+    if (n > (vertices.size() - at) / 3) in.fail("the polygon outlines run past their chunk");
+    std::vector<glm::vec3> outline(n);
+    for (std::uint32_t i = 0; i < n; ++i, at += 3) outline[i] = {vertices[at], vertices[at + 1], vertices[at + 2]};
+    try {
+      polygons.push_back(core::make_polygon(std::move(outline)));
+    } catch (const std::invalid_argument& e) {
+      in.fail("polygon geometry " + std::to_string(&g - geometries.data()) + ": " + e.what());
+    }
+  }
+  if (at != vertices.size()) in.fail("the polygon outlines do not fill their chunk");
+}
+
+void Accel::Impl::load_from(const std::string& path) {
+  namespace file = accel::file;
+  auto mapping = std::make_shared<const file::Mapping>(path);
+  file::Reader in(mapping, path);
+  read_options(in);
 
   const file::Meta& meta = in.one<file::Meta>(file::Tag::meta);
   if (meta.quality > static_cast<std::uint32_t>(BuildQuality::high)) in.fail("the build quality is not valid");
@@ -107,22 +129,7 @@ void Accel::Impl::load_from(const std::string& path) {
     if (g.polygon) polygon_ids.push_back(g.first);
   next_id = static_cast<std::uint32_t>(meta.next_id);
 
-  // Polygons: few, rebuilt from their outlines (make_polygon checks each again).
-  std::size_t at = 0;
-  for (const Geometry& g : geometries) {
-    if (!g.polygon) continue;
-    const std::uint32_t n = polygon_sizes[polygons.size()];
-    if (n > (polygon_vertices.size() - at) / 3) in.fail("the polygon outlines run past their chunk");
-    std::vector<glm::vec3> outline(n);
-    for (std::uint32_t i = 0; i < n; ++i, at += 3)
-      outline[i] = {polygon_vertices[at], polygon_vertices[at + 1], polygon_vertices[at + 2]};
-    try {
-      polygons.push_back(core::make_polygon(std::move(outline)));
-    } catch (const std::invalid_argument& e) {
-      in.fail("polygon geometry " + std::to_string(&g - geometries.data()) + ": " + e.what());
-    }
-  }
-  if (at != polygon_vertices.size()) in.fail("the polygon outlines do not fill their chunk");
+  read_polygons(in, polygon_sizes, polygon_vertices);
 
   // The layers: the masks of the geometry table, in the order a build makes them.
   const std::vector<std::uint32_t> masks = layer_masks();

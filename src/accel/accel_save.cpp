@@ -9,9 +9,8 @@
 
 namespace volley {
 
-void Accel::Impl::save_to(const std::string& path) const {
-  namespace file = accel::file;
-  file::Meta meta{};
+accel::file::Meta Accel::Impl::meta_record() const {
+  accel::file::Meta meta{};
   meta.geometries = geometries.size();
   meta.triangles = triangle_count();
   meta.polygons = polygons.size();
@@ -22,6 +21,29 @@ void Accel::Impl::save_to(const std::string& path) const {
   meta.build_seconds = build_seconds;
   meta.refitted = refitted;
   meta.quality = static_cast<std::uint32_t>(quality);
+  return meta;
+}
+
+accel::file::LayerRecord Accel::Impl::layer_record(const Layer& l, const accel::WideImage& image) {
+  accel::file::LayerRecord r{};
+  r.mask = l.mask;
+  r.root = image.root;
+  r.has_triangles = l.triangle_engine != nullptr;
+  r.built_sah = l.built_sah;
+  r.sah_now = l.sah_now;
+  r.bvh_nodes = l.triangle_stats.nodes, r.bvh_leaves = l.triangle_stats.leaves;
+  r.bvh_depth = l.triangle_stats.depth, r.bvh_bytes = l.triangle_stats.bytes;
+  r.bvh_sah_cost = l.triangle_stats.sah_cost, r.bvh_mean_leaf_size = l.triangle_stats.mean_leaf_size;
+  const simd::WideStats& w = image.stats;
+  r.wide_nodes = w.nodes, r.wide_leaves = w.leaves, r.wide_depth = w.depth;
+  r.wide_blocks = w.blocks, r.wide_triangles = w.triangles, r.wide_bytes = w.bytes;
+  r.wide_mean_children = w.mean_children, r.wide_sah_cost = w.sah_cost, r.wide_block_sah_cost = w.block_sah_cost;
+  return r;
+}
+
+void Accel::Impl::save_to(const std::string& path) const {
+  namespace file = accel::file;
+  const file::Meta meta = meta_record();
 
   std::vector<file::GeometryRecord> records;
   std::vector<std::uint32_t> polygon_sizes;
@@ -75,19 +97,7 @@ void Accel::Impl::save_to(const std::string& path) const {
     const accel::WideAccel* wide = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
     const accel::WideImage image = wide ? wide->image() : accel::WideImage{};
     if (wide) header.block_bytes = static_cast<std::uint32_t>(image.block_bytes);
-    file::LayerRecord r{};
-    r.mask = l.mask;
-    r.root = image.root;
-    r.has_triangles = l.triangle_engine != nullptr;
-    r.built_sah = l.built_sah;
-    r.sah_now = l.sah_now;
-    r.bvh_nodes = l.triangle_stats.nodes, r.bvh_leaves = l.triangle_stats.leaves;
-    r.bvh_depth = l.triangle_stats.depth, r.bvh_bytes = l.triangle_stats.bytes;
-    r.bvh_sah_cost = l.triangle_stats.sah_cost, r.bvh_mean_leaf_size = l.triangle_stats.mean_leaf_size;
-    const simd::WideStats& w = image.stats;
-    r.wide_nodes = w.nodes, r.wide_leaves = w.leaves, r.wide_depth = w.depth;
-    r.wide_blocks = w.blocks, r.wide_triangles = w.triangles, r.wide_bytes = w.bytes;
-    r.wide_mean_children = w.mean_children, r.wide_sah_cost = w.sah_cost, r.wide_block_sah_cost = w.block_sah_cost;
+    const file::LayerRecord r = layer_record(l, image);
     out.chunk(file::Tag::layer, &r, sizeof r);
     out.chunk(file::Tag::nodes, image.nodes, image.node_count * sizeof(simd::WideNode<simd::kWideN>));
     out.chunk(file::Tag::blocks, image.blocks, image.block_count * image.block_bytes);

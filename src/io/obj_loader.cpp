@@ -1,16 +1,11 @@
 #include "io/obj_loader.h"
 
-#include <tiny_obj_loader.h>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <iostream>
 #include <limits>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -20,12 +15,13 @@
 
 #include "io/load_error.h"
 #include "io/mesh_append.h"
+#include "io/obj_materials.h"
 #include "io/text_file.h"
 
 namespace volley::io {
 namespace {
 
-constexpr std::uint32_t kNone = 0xffffffffu;
+constexpr std::uint32_t kNone = kNoMaterialSlot;  // also: a corner without a vn
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
@@ -71,11 +67,7 @@ class ObjParser {
   std::vector<std::uint32_t> corner_normal;    ///< 3 per triangle (kNone: no vn) if has_normals
   std::vector<std::uint32_t> triangle_slot;    ///< 1 per triangle: index into slot_names or kNone
   std::vector<std::string> slot_names;         ///< usemtl names in order of first use
-  struct Library {
-    std::string name;
-    std::size_t line;
-  };
-  std::vector<Library> libraries;  ///< mtllib file names as written
+  std::vector<MtlLibrary> libraries;  ///< mtllib file names as written
   std::vector<ForwardRef> forward_refs;
 
  private:
@@ -250,107 +242,86 @@ void ObjParser::parse_face(const char* p, const char* e) {
   }
 }
 
-std::string trimmed(std::string s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return {};
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
-glm::vec3 vec3_of(const tinyobj::real_t (&a)[3]) { return {a[0], a[1], a[2]}; }
-
-/// MTL → Phong material with the notes' global terms (mapping documented in obj_loader.h).
-Material material_from_mtl(const tinyobj::material_t& m) {
-  Material out;
-  out.name = trimmed(m.name);
-  out.ambient = vec3_of(m.ambient);
-  out.diffuse = vec3_of(m.diffuse);
-  out.specular = vec3_of(m.specular);
-  out.shininess = m.shininess;
-  out.emission = vec3_of(m.emission);
-  out.ior = m.ior;
-  if (m.illum == 3 || m.illum == 5) out.mirror = out.specular;
-  const bool refracting = m.illum == 4 || m.illum == 6 || m.illum == 7;
-  if (refracting || m.dissolve < 1.0f) {
-    const float amount = m.dissolve < 1.0f ? 1.0f - std::max(m.dissolve, 0.0f) : 1.0f;
-    glm::vec3 filter = vec3_of(m.transmittance);
-    if (filter == glm::vec3(0.0f)) filter = glm::vec3(1.0f);
-    out.transmittance = amount * filter;
+/// Forward references (an index past the vertices or normals defined when it was read)
+/// that the rest of the file did not make valid.
+void check_forward_refs(const std::filesystem::path& file, const ObjParser& obj) {
+  for (const ForwardRef& ref : obj.forward_refs) {
+    const std::size_t defined = ref.normal ? obj.normals.size() : obj.positions.size();
+    if (ref.index > defined)
+      throw LoadError(file, ref.line, ref.column,
+                      std::string(ref.normal ? "normal" : "vertex") + " index " + std::to_string(ref.index) +
+                          " is out of range: the file has " + std::to_string(defined) +
+                          (ref.normal ? " normals" : " vertices"));
   }
-  return out;
 }
 
-void warn(const std::string& message) { std::cerr << "warning: " << message << '\n'; }
-
-/// The materials of every mtllib the file names, first definition of a name winning.
-std::map<std::string, Material> read_libraries(const std::filesystem::path& file,
-                                               const std::vector<ObjParser::Library>& libraries) {
-  std::map<std::string, Material> by_name;
-  for (const auto& lib : libraries) {
-    const std::filesystem::path path = file.parent_path() / lib.name;
-    const std::string where = file.string() + ':' + std::to_string(lib.line) + ": ";
-    std::error_code ec;
-    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec)) {
-      // A device or pipe (mtllib /dev/zero) could be endless.
-      warn(where + "material library \"" + lib.name + "\" is not a regular file (" + path.string() +
-           "); its materials use the default material");
-      continue;
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-      warn(where + "material library \"" + lib.name + "\" not found (looked for " + path.string() +
-           "); its materials use the default material");
-      continue;
-    }
-    std::map<std::string, int> index_of_name;
-    std::vector<tinyobj::material_t> materials;
-    std::string warnings, errors;
-    tinyobj::LoadMtl(&index_of_name, &materials, &in, &warnings, &errors);
-    if (!warnings.empty() || !errors.empty()) warn(where + path.string() + ": " + trimmed(warnings + errors));
-    for (const auto& m : materials) {
-      Material converted = material_from_mtl(m);
-      by_name.try_emplace(converted.name, std::move(converted));
-    }
+/// The positions moved by the object transform, each checked finite (the identity is
+/// skipped so that coordinates stay bit-exact).
+void transform_positions(const std::filesystem::path& file, const glm::mat4& transform,
+                         std::vector<glm::vec3>& positions) {
+  if (transform == glm::mat4(1.0f)) return;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
+    if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+      throw LoadError(file, "vertex " + std::to_string(i + 1) + " is not finite after the object transform");
   }
-  return by_name;
 }
 
-/// Material index of every triangle: the override, or the MTL material its usemtl
-/// names (appended to `materials` on first use), or the default material.
-std::vector<std::uint32_t> assign_materials(const std::filesystem::path& file, const ObjParser& obj,
-                                            std::optional<std::uint32_t> material_override,
-                                            std::vector<Material>& materials) {
+/// The file's vn normals moved by the transform's normal matrix, unit length; 0 where a
+/// normal is zero or not finite (its corners take the face normal).
+std::vector<glm::vec3> unit_normals(const ObjParser& obj, const glm::mat4& transform) {
+  const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(transform)));
+  std::vector<glm::vec3> unit(obj.normals.size());
+  for (std::size_t i = 0; i < unit.size(); ++i) {
+    const glm::vec3 n = normal_matrix * obj.normals[i];
+    const float len = glm::length(n);
+    unit[i] = (len > 0.0f && std::isfinite(len)) ? n / len : glm::vec3(0.0f);
+  }
+  return unit;
+}
+
+/// Corner normals of the new triangles (empty when the file has no vn references). Corners
+/// without a usable vn take the face normal, else (zero-area triangle) another corner's
+/// normal, else +z; such triangles are never hit.
+std::vector<glm::vec3> corner_normals(const ObjParser& obj, const glm::mat4& transform) {
+  if (!obj.has_normals) return {};
+  const std::vector<glm::vec3> unit = unit_normals(obj, transform);
   const std::size_t triangles = obj.triangle_slot.size();
-  if (material_override) return std::vector<std::uint32_t>(triangles, *material_override);
-
-  const std::map<std::string, Material> library = read_libraries(file, obj.libraries);
-  std::vector<std::uint32_t> material_of_slot(obj.slot_names.size(), kNone);
-  std::vector<std::string> undefined;
-  for (std::size_t s = 0; s < obj.slot_names.size(); ++s) {
-    const auto it = library.find(obj.slot_names[s]);
-    if (it == library.end()) {
-      undefined.push_back(obj.slot_names[s]);
-      continue;
-    }
-    material_of_slot[s] = static_cast<std::uint32_t>(materials.size());
-    materials.push_back(it->second);
-  }
-  if (!undefined.empty())
-    warn(file.string() + ": " + std::to_string(undefined.size()) +
-         " material name(s) used by usemtl but defined in no material library (\"" + undefined.front() + "\"" +
-         (undefined.size() > 1 ? ", ..." : "") + "); their faces use the default material");
-
-  std::vector<std::uint32_t> result(triangles);
-  std::uint32_t fallback = kNone;
+  std::vector<glm::vec3> normals(3 * triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
-    const std::uint32_t slot = obj.triangle_slot[t];
-    std::uint32_t m = slot == kNone ? kNone : material_of_slot[slot];
-    if (m == kNone) {
-      if (fallback == kNone) fallback = ensure_default_material(materials);
-      m = fallback;
+    glm::vec3* corner = &normals[3 * t];
+    glm::vec3 any_corner(0.0f);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t n = obj.corner_normal[3 * t + k];
+      corner[k] = n == kNone ? glm::vec3(0.0f) : unit[n];
+      if (corner[k] != glm::vec3(0.0f)) any_corner = corner[k];
     }
-    result[t] = m;
+    if (corner[0] != glm::vec3(0.0f) && corner[1] != glm::vec3(0.0f) && corner[2] != glm::vec3(0.0f)) continue;
+    const std::uint32_t* v = &obj.corner_position[3 * t];
+    glm::vec3 fallback = geometric_normal(obj.positions[v[0]], obj.positions[v[1]], obj.positions[v[2]]);
+    if (fallback == glm::vec3(0.0f)) fallback = any_corner;
+    if (fallback == glm::vec3(0.0f)) fallback = glm::vec3(0, 0, 1);
+    for (int k = 0; k < 3; ++k)
+      if (corner[k] == glm::vec3(0.0f)) corner[k] = fallback;
   }
-  return result;
+  return normals;
+}
+
+/// The parsed triangles appended to the scene's mesh (allocation failure aside, nothing
+/// here throws).
+void commit(const ObjParser& obj, const std::vector<std::uint32_t>& triangle_material,
+            const std::vector<glm::vec3>& new_normals, MeshDesc& mesh) {
+  const std::size_t base = mesh.positions.size();
+  if (!new_normals.empty()) complete_corner_normals(mesh);  // earlier triangles without normals
+  const bool mesh_has_normals = !mesh.corner_normals.empty();
+  mesh.positions.insert(mesh.positions.end(), obj.positions.begin(), obj.positions.end());
+  mesh.indices.reserve(mesh.indices.size() + obj.corner_position.size());
+  for (const std::uint32_t i : obj.corner_position) mesh.indices.push_back(static_cast<std::uint32_t>(base + i));
+  mesh.material.insert(mesh.material.end(), triangle_material.begin(), triangle_material.end());
+  if (!new_normals.empty())
+    mesh.corner_normals.insert(mesh.corner_normals.end(), new_normals.begin(), new_normals.end());
+  else if (mesh_has_normals)
+    complete_corner_normals(mesh);
 }
 
 }  // namespace
@@ -364,83 +335,19 @@ void load_obj(const std::filesystem::path& file, const glm::mat4& transform,
   const std::string text = read_text_file(file);
   ObjParser obj(file, text);
   obj.parse();
-
-  for (const ForwardRef& ref : obj.forward_refs) {
-    const std::size_t defined = ref.normal ? obj.normals.size() : obj.positions.size();
-    if (ref.index > defined)
-      throw LoadError(file, ref.line, ref.column,
-                      std::string(ref.normal ? "normal" : "vertex") + " index " + std::to_string(ref.index) +
-                          " is out of range: the file has " + std::to_string(defined) +
-                          (ref.normal ? " normals" : " vertices"));
-  }
-
-  MeshDesc& mesh = into.mesh;
-  const std::size_t base = mesh.positions.size();
-  if (base + obj.positions.size() >= kNone)
+  check_forward_refs(file, obj);
+  if (into.mesh.positions.size() + obj.positions.size() >= kNone)
     throw LoadError(file, "too many vertices in the scene (more than 2^32 - 1)");
+  transform_positions(file, transform, obj.positions);
 
-  // Transform positions (the identity is skipped so that coordinates stay bit-exact).
-  std::vector<glm::vec3>& positions = obj.positions;
-  if (transform != glm::mat4(1.0f)) {
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-      positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
-      if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
-        throw LoadError(file, "vertex " + std::to_string(i + 1) + " is not finite after the object transform");
-    }
-  }
-
-  // Everything below only appends; build the material indices first, since reading
-  // the MTL is the last step that may throw, then commit.
+  // Everything below only appends; the material indices come first, since reading the
+  // MTL is the last step that may throw.
   std::vector<Material> materials = into.materials;
-  std::vector<std::uint32_t> triangle_material = assign_materials(file, obj, material_override, materials);
-
-  // Corner normals of the new triangles (empty when the file has no vn references).
-  std::vector<glm::vec3> new_normals;
-  const std::size_t triangles = obj.triangle_slot.size();
-  if (obj.has_normals) {
-    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(transform)));
-    std::vector<glm::vec3> unit(obj.normals.size());
-    for (std::size_t i = 0; i < unit.size(); ++i) {
-      const glm::vec3 n = normal_matrix * obj.normals[i];
-      const float len = glm::length(n);
-      unit[i] = (len > 0.0f && std::isfinite(len)) ? n / len : glm::vec3(0.0f);  // 0: use the face normal
-    }
-    new_normals.resize(3 * triangles);
-    for (std::size_t t = 0; t < triangles; ++t) {
-      glm::vec3 corner[3];
-      glm::vec3 any_corner(0.0f);
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t n = obj.corner_normal[3 * t + k];
-        corner[k] = n == kNone ? glm::vec3(0.0f) : unit[n];
-        if (corner[k] != glm::vec3(0.0f)) any_corner = corner[k];
-      }
-      if (corner[0] == glm::vec3(0.0f) || corner[1] == glm::vec3(0.0f) || corner[2] == glm::vec3(0.0f)) {
-        // Fallback for corners without a usable vn: the face normal, else (zero-area
-        // triangle) another corner's normal, else +z. Such triangles are never hit.
-        glm::vec3 fallback = geometric_normal(positions[obj.corner_position[3 * t]],
-                                              positions[obj.corner_position[3 * t + 1]],
-                                              positions[obj.corner_position[3 * t + 2]]);
-        if (fallback == glm::vec3(0.0f)) fallback = any_corner;
-        if (fallback == glm::vec3(0.0f)) fallback = glm::vec3(0, 0, 1);
-        for (glm::vec3& c : corner)
-          if (c == glm::vec3(0.0f)) c = fallback;
-      }
-      for (int k = 0; k < 3; ++k) new_normals[3 * t + k] = corner[k];
-    }
-  }
-
-  // Commit (allocation failure aside, nothing below throws).
+  const std::vector<std::uint32_t> triangle_material = obj_triangle_materials(
+      file, {obj.libraries, obj.slot_names, obj.triangle_slot}, material_override, materials);
+  const std::vector<glm::vec3> new_normals = corner_normals(obj, transform);
   into.materials = std::move(materials);
-  if (!new_normals.empty()) complete_corner_normals(mesh);  // earlier triangles without normals
-  const bool mesh_has_normals = !mesh.corner_normals.empty();
-  mesh.positions.insert(mesh.positions.end(), positions.begin(), positions.end());
-  mesh.indices.reserve(mesh.indices.size() + obj.corner_position.size());
-  for (const std::uint32_t i : obj.corner_position) mesh.indices.push_back(static_cast<std::uint32_t>(base + i));
-  mesh.material.insert(mesh.material.end(), triangle_material.begin(), triangle_material.end());
-  if (!new_normals.empty())
-    mesh.corner_normals.insert(mesh.corner_normals.end(), new_normals.begin(), new_normals.end());
-  else if (mesh_has_normals)
-    complete_corner_normals(mesh);
+  commit(obj, triangle_material, new_normals, into.mesh);
 }
 
 }  // namespace volley::io

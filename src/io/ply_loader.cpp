@@ -196,6 +196,128 @@ int property_index(const Element& e, std::string_view name) {
   return -1;
 }
 
+/// The face element's list of corners: vertex_indices, or vertex_index; -1 when absent.
+int corner_list_index(const Element& e) {
+  const int list = property_index(e, "vertex_indices");
+  return list >= 0 ? list : property_index(e, "vertex_index");
+}
+
+/// The vertex count, after checking the properties' roles: x, y and z scalars, a face's
+/// corner list. Checked before any data is read.
+std::size_t checked_vertex_count(const std::filesystem::path& file, const Header& header) {
+  std::size_t vertex_count = 0;
+  for (const Element& e : header.elements) {
+    if (e.name == "vertex") {
+      vertex_count = e.count;
+      for (const char* axis : {"x", "y", "z"}) {
+        const int i = property_index(e, axis);
+        if (i < 0 || e.properties[i].is_list)
+          throw LoadError(file, std::string("the vertex element has no scalar property ") + axis);
+      }
+    } else if (e.name == "face" && corner_list_index(e) < 0) {
+      throw LoadError(file, "the face element has no list property vertex_indices (or vertex_index)");
+    }
+  }
+  return vertex_count;
+}
+
+/// Counts the body cannot hold fail before anything is allocated for them: each record of
+/// an element with P properties is at least P one-character tokens with a separator after
+/// all but the file's last.
+void check_counts_fit(const std::filesystem::path& file, const Header& header, std::size_t body_bytes) {
+  for (const Element& e : header.elements) {
+    const std::size_t min_bytes = 2 * e.properties.size();
+    if (min_bytes != 0 && e.count > (body_bytes + 1) / min_bytes)
+      throw LoadError(file, "the header claims " + std::to_string(e.count) + " " + e.name + " records, but the " +
+                                std::to_string(body_bytes) + " bytes after end_header hold at most " +
+                                std::to_string((body_bytes + 1) / min_bytes) + " (truncated or corrupt file)");
+  }
+}
+
+/// What the body's records add up to: the vertices and the faces fanned into triangles.
+struct PlyBody {
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+};
+
+/// One face's corner list, fanned into triangles appended to `indices`.
+void read_face(Tokenizer& in, std::size_t vertex_count, std::vector<std::uint32_t>& face,
+               std::vector<std::uint32_t>& indices) {
+  const long long count = in.integer("a face's vertex count");
+  if (count < 3) in.fail("a face needs at least 3 vertices, found " + std::to_string(count));
+  if (static_cast<unsigned long long>(count) > kMaxFaceCorners)
+    in.fail("a face has " + std::to_string(count) + " corners, more than " + std::to_string(kMaxFaceCorners) +
+            " (the limit of one face)");
+  face.clear();
+  for (long long i = 0; i < count; ++i) {
+    const long long index = in.integer("a vertex index");
+    if (index < 0 || static_cast<unsigned long long>(index) >= vertex_count)
+      in.fail("vertex index " + std::to_string(index) + " is out of range: the file has " +
+              std::to_string(vertex_count) + " vertices (indices start at 0)");
+    face.push_back(static_cast<std::uint32_t>(index));
+  }
+  for (std::size_t i = 1; i + 1 < face.size(); ++i) indices.insert(indices.end(), {face[0], face[i], face[i + 1]});
+}
+
+/// A property this loader does not use, skipped (a list with its values).
+void skip_property(Tokenizer& in, const Property& prop) {
+  if (!prop.is_list) {
+    in.next("a property value");
+    return;
+  }
+  const long long count = in.integer("a list length");
+  if (count < 0) in.fail("expected a list length, found " + std::to_string(count));
+  for (long long i = 0; i < count; ++i) in.next("a list value");
+}
+
+/// The records of one element: a vertex's coordinates, a face's corners, the rest skipped.
+void read_element(Tokenizer& in, const Element& e, std::size_t vertex_count, PlyBody& body) {
+  const bool is_vertex = e.name == "vertex";
+  const int x = is_vertex ? property_index(e, "x") : -1;
+  const int y = is_vertex ? property_index(e, "y") : -1;
+  const int z = is_vertex ? property_index(e, "z") : -1;
+  const int list = e.name == "face" ? corner_list_index(e) : -1;
+  std::vector<std::uint32_t> face;
+  // An element without properties has no data, whatever its count.
+  for (std::size_t n = 0; n < e.count && !e.properties.empty(); ++n) {
+    glm::vec3 p{0.0f};
+    for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
+      if (k == x || k == y || k == z) {
+        const double v = in.number("vertex coordinate");
+        if (std::fabs(v) > 3.4028234663852886e38) in.fail("vertex coordinate out of float range");
+        p[k == x ? 0 : k == y ? 1 : 2] = static_cast<float>(v);
+      } else if (k == list) {
+        read_face(in, vertex_count, face, body.indices);
+      } else {
+        skip_property(in, e.properties[k]);
+      }
+    }
+    if (is_vertex) body.positions.push_back(p);
+  }
+}
+
+/// The positions moved by the object transform, each checked finite.
+void transform_positions(const std::filesystem::path& file, const glm::mat4& transform,
+                         std::vector<glm::vec3>& positions) {
+  if (transform == glm::mat4(1.0f)) return;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
+    if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+      throw LoadError(file, "vertex " + std::to_string(i) + " is not finite after the object transform");
+  }
+}
+
+/// The body's triangles appended to the scene's mesh with one material.
+void commit(const PlyBody& body, std::uint32_t material, MeshDesc& mesh) {
+  const std::size_t base = mesh.positions.size();
+  const bool mesh_has_normals = !mesh.corner_normals.empty();
+  mesh.positions.insert(mesh.positions.end(), body.positions.begin(), body.positions.end());
+  mesh.indices.reserve(mesh.indices.size() + body.indices.size());
+  for (const std::uint32_t i : body.indices) mesh.indices.push_back(static_cast<std::uint32_t>(base + i));
+  mesh.material.insert(mesh.material.end(), body.indices.size() / 3, material);
+  if (mesh_has_normals) complete_corner_normals(mesh);
+}
+
 }  // namespace
 
 void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
@@ -206,108 +328,21 @@ void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
                                 " materials");
   const std::string text = read_text_file(file);
   const Header header = parse_header(file, text);
-
-  // Vertex count and the roles of the properties, checked before reading any data.
-  std::size_t vertex_count = 0;
-  for (const Element& e : header.elements) {
-    if (e.name == "vertex") {
-      vertex_count = e.count;
-      for (const char* axis : {"x", "y", "z"}) {
-        const int i = property_index(e, axis);
-        if (i < 0 || e.properties[i].is_list)
-          throw LoadError(file, std::string("the vertex element has no scalar property ") + axis);
-      }
-    } else if (e.name == "face" && property_index(e, "vertex_indices") < 0 &&
-               property_index(e, "vertex_index") < 0) {
-      throw LoadError(file, "the face element has no list property vertex_indices (or vertex_index)");
-    }
-  }
-
-  // Counts the body cannot hold fail before anything is allocated for them: each record
-  // of an element with P properties is at least P one-character tokens with a separator
-  // after all but the file's last.
-  const std::size_t body_bytes = text.size() - header.body_offset;
-  for (const Element& e : header.elements) {
-    const std::size_t min_bytes = 2 * e.properties.size();
-    if (min_bytes != 0 && e.count > (body_bytes + 1) / min_bytes)
-      throw LoadError(file, "the header claims " + std::to_string(e.count) + " " + e.name + " records, but the " +
-                                std::to_string(body_bytes) + " bytes after end_header hold at most " +
-                                std::to_string((body_bytes + 1) / min_bytes) + " (truncated or corrupt file)");
-  }
+  const std::size_t vertex_count = checked_vertex_count(file, header);
+  check_counts_fit(file, header, text.size() - header.body_offset);
   if (vertex_count >= 0xffffffffu)
     throw LoadError(file, "the header claims " + std::to_string(vertex_count) + " vertices; the limit is 2^32 - 2");
 
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
-  positions.reserve(vertex_count);
+  PlyBody body;
+  body.positions.reserve(vertex_count);
   Tokenizer in(file, text, header.body_offset, header.body_line);
-  std::vector<std::uint32_t> face;
-  for (const Element& e : header.elements) {
-    const bool is_vertex = e.name == "vertex";
-    const bool is_face = e.name == "face";
-    const int x = is_vertex ? property_index(e, "x") : -1;
-    const int y = is_vertex ? property_index(e, "y") : -1;
-    const int z = is_vertex ? property_index(e, "z") : -1;
-    int list = is_face ? property_index(e, "vertex_indices") : -1;
-    if (is_face && list < 0) list = property_index(e, "vertex_index");
-    // An element without properties has no data, whatever its count.
-    for (std::size_t n = 0; n < e.count && !e.properties.empty(); ++n) {
-      glm::vec3 p{0.0f};
-      for (int k = 0; k < static_cast<int>(e.properties.size()); ++k) {
-        const Property& prop = e.properties[k];
-        if (k == x || k == y || k == z) {
-          const double v = in.number("vertex coordinate");
-          if (std::fabs(v) > 3.4028234663852886e38) in.fail("vertex coordinate out of float range");
-          p[k == x ? 0 : k == y ? 1 : 2] = static_cast<float>(v);
-        } else if (k == list) {
-          const long long count = in.integer("a face's vertex count");
-          if (count < 3) in.fail("a face needs at least 3 vertices, found " + std::to_string(count));
-          if (static_cast<unsigned long long>(count) > kMaxFaceCorners)
-            in.fail("a face has " + std::to_string(count) + " corners, more than " + std::to_string(kMaxFaceCorners) +
-                    " (the limit of one face)");
-          face.clear();
-          for (long long i = 0; i < count; ++i) {
-            const long long index = in.integer("a vertex index");
-            if (index < 0 || static_cast<unsigned long long>(index) >= vertex_count)
-              in.fail("vertex index " + std::to_string(index) + " is out of range: the file has " +
-                      std::to_string(vertex_count) + " vertices (indices start at 0)");
-            face.push_back(static_cast<std::uint32_t>(index));
-          }
-          for (std::size_t i = 1; i + 1 < face.size(); ++i) indices.insert(indices.end(), {face[0], face[i], face[i + 1]});
-        } else if (prop.is_list) {
-          const long long count = in.integer("a list length");
-          if (count < 0) in.fail("expected a list length, found " + std::to_string(count));
-          for (long long i = 0; i < count; ++i) in.next("a list value");
-        } else {
-          in.next("a property value");
-        }
-      }
-      if (is_vertex) positions.push_back(p);
-    }
-  }
+  for (const Element& e : header.elements) read_element(in, e, vertex_count, body);
   if (!in.at_end()) in.fail("unexpected data after the last element");
 
-  MeshDesc& mesh = into.mesh;
-  const std::size_t base = mesh.positions.size();
-  if (base + positions.size() >= 0xffffffffu)
+  if (into.mesh.positions.size() + body.positions.size() >= 0xffffffffu)
     throw LoadError(file, "too many vertices in the scene (more than 2^32 - 1)");
-  if (transform != glm::mat4(1.0f)) {
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-      positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
-      if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
-        throw LoadError(file, "vertex " + std::to_string(i) + " is not finite after the object transform");
-    }
-  }
-
-  // Commit.
-  const std::uint32_t material =
-      material_override ? *material_override : ensure_default_material(into.materials);
-  const bool mesh_has_normals = !mesh.corner_normals.empty();
-  mesh.positions.insert(mesh.positions.end(), positions.begin(), positions.end());
-  mesh.indices.reserve(mesh.indices.size() + indices.size());
-  for (const std::uint32_t i : indices) mesh.indices.push_back(static_cast<std::uint32_t>(base + i));
-  mesh.material.insert(mesh.material.end(), indices.size() / 3, material);
-  if (mesh_has_normals) complete_corner_normals(mesh);
+  transform_positions(file, transform, body.positions);
+  commit(body, material_override ? *material_override : ensure_default_material(into.materials), into.mesh);
 }
 
 }  // namespace volley::io
