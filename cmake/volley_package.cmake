@@ -97,6 +97,7 @@ install(FILES
   ${PROJECT_SOURCE_DIR}/src/volley/volley.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley_masked.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley_queries.h
+  ${PROJECT_SOURCE_DIR}/src/volley/volley_types.h
   ${PROJECT_SOURCE_DIR}/src/volley/point.h
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/volley COMPONENT development)
 install(EXPORT volleySharedTargets NAMESPACE volley:: DESTINATION ${VOLLEY_INSTALL_CMAKEDIR} COMPONENT development)

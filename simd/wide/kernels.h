@@ -192,14 +192,12 @@ struct WideKernels {
   /// AnyHitRay): returns query.answer(). The packet walks' fallback, and the entry of every
   /// single-ray query.
   template <class Query, class Leaves>
-    requires detail::RayQuery<Query, Leaves>
   static bool trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start, Query& query);
   /// trace_single for valid lane i of a screened and prepared packet: the lane's prepared
   /// ray and reciprocal are taken from the packet, whose prepare is make_woop_ray lane by
   /// lane (the values prepare_single computes; tests/simd), so no division is repeated.
   /// The packet walks' hand-offs of few lanes.
   template <class Query, class Leaves>
-    requires detail::RayQuery<Query, Leaves>
   static bool trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
                          const detail::PacketSetup<K>& setup, int i, std::uint32_t start, Query& query);
 
@@ -225,7 +223,6 @@ struct WideKernels {
   /// trace_single, inlined into the erased entries (of any view: triangle blocks or the
   /// instance ids of a top level).
   template <class Query, class Leaves>
-    requires detail::RayQuery<Query, Leaves>
   [[gnu::always_inline]] inline static bool trace_ray(const WideView<Leaves>& bvh, const Ray& ray,
                                                       std::uint32_t start, Query& query);
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
@@ -238,7 +235,6 @@ struct WideKernels {
 
   /// The stream walk of rays[0 .. n) (n <= kStreamBatch) for a stream query (queries.h).
   template <class Query>
-    requires detail::StreamQuery<Query, WideKernels>
   static void trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query);
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
@@ -246,7 +242,6 @@ struct WideKernels {
   /// test and hands it to the walk its lanes allow (frustum or per lane). Returns the lanes
   /// the query finished (0 for an empty tree or no valid lane).
   template <class Query, class Leaves>
-    requires detail::PacketQuery<Query, WideKernels, Leaves>
   static std::uint32_t trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays, Query& query);
   /// The frustum walk of a coherent packet: one 8-wide interval test per node for the whole
   /// packet, per-lane tests at leaves and at each subtree popped. Requires every valid lane

@@ -11,9 +11,9 @@ namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-  requires detail::PacketQuery<Query, WideKernels<Arch, Test, Robust, PK>, Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet_query(const WideView<Leaves>& bvh, const RayPacket<K>& rays,
                                                                   Query& query) {
+  static_assert(detail::PacketQuery<Query, WideKernels, Leaves>, "the packet walks take a PacketQuery (query_protocol.h)");
   if (bvh.root == wide_ref::kEmptyRef || (rays.active & static_cast<std::uint32_t>((std::uint64_t{1} << K) - 1u)) == 0) return 0;
   PreparedPacket<K> prep;
   prep.rays = rays;

@@ -1,5 +1,5 @@
 // The query protocol: what a query gives the walks (single_walk.h, frustum_walk.h,
-// packet_walk.h, stream_walk.h), declared as concepts that the walks' entries require.
+// packet_walk.h, stream_walk.h), declared as concepts that each walk checks at compile time.
 // A query is a termination rule, a leaf action and an answer; the walks know nothing else
 // of what is asked and name no query, so a new query is a new type (queries.h,
 // packet_queries.h, stream_queries.h) and an entry that hands it to a walk

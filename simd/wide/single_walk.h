@@ -18,7 +18,6 @@ namespace volley::simd {
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_single(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                    Query& query) {
   return trace_ray(bvh, ray, start, query);
@@ -26,7 +25,6 @@ bool WideKernels<Arch, Test, Robust, PK>::trace_single(const WideView<Leaves>& b
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_lane(const WideView<Leaves>& bvh, const PreparedPacket<K>& prep,
                                                  const detail::PacketSetup<K>& setup, int i, std::uint32_t start,
                                                  Query& query) {
@@ -52,7 +50,6 @@ bool WideKernels<Arch, Test, Robust, PK>::trace_lane(const WideView<Leaves>& bvh
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
-  requires detail::RayQuery<Query, Leaves>
 bool WideKernels<Arch, Test, Robust, PK>::trace_ray(const WideView<Leaves>& bvh, const Ray& ray, std::uint32_t start,
                                                 Query& query) {
   if (start == wide_ref::kEmptyRef) return query.answer();
@@ -70,6 +67,7 @@ template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, bool NoZero, class Leaves>
 void WideKernels<Arch, Test, Robust, PK>::walk(const WideView<Leaves>& bvh, const PreparedRay& pr, __m128 inv,
                                            std::uint32_t start, Query& query) {
+  static_assert(detail::RayQuery<Query, Leaves>, "the single-ray walk takes a RayQuery (query_protocol.h)");
   using V8 = detail::Lanes8<Arch>;
   static_assert(N == 8, "the single-ray node test reads eight children");
   const Ray& ray = pr.ray;

@@ -79,8 +79,8 @@ template <int L>
 // query that asks (kNearFirst), in slot order otherwise.
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query>
-  requires detail::StreamQuery<Query, WideKernels<Arch, Test, Robust, PK>>
 void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query) {
+  static_assert(detail::StreamQuery<Query, WideKernels>, "the stream walk takes a StreamQuery (query_protocol.h)");
   using B = detail::FloatB<Arch>;
   using I = detail::IntB<Arch>;
   using M = detail::MaskB<Arch>;

@@ -374,32 +374,11 @@ simd::WideStats build_wide(const core::Bvh& bvh, const float* xyz, const std::ui
   return stats;
 }
 
-template simd::WideStats build_wide<TriangleTest::moller, 4>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::moller, 4>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::moller, 8>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::moller, 8>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::moller, 16>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::moller, 16>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::plane, 4>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::plane, 4>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::plane, 8>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::plane, 8>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::plane, 16>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::plane, 16>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::watertight, 4>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::watertight, 4>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::watertight, 8>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::watertight, 8>>&, std::uint32_t&);
-template simd::WideStats build_wide<TriangleTest::watertight, 16>(
-    const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,
-    simd::AlignedVector<simd::BlockFor<TriangleTest::watertight, 16>>&, std::uint32_t&);
+#define VOLLEY_BUILD_WIDE(test, w)                                                                          \
+  template simd::WideStats build_wide<TriangleTest::test, w>(                                                \
+      const core::Bvh&, const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,         \
+      simd::AlignedVector<simd::BlockFor<TriangleTest::test, w>>&, std::uint32_t&);
+VOLLEY_WIDE_BLOCK_FORMS(VOLLEY_BUILD_WIDE)
+#undef VOLLEY_BUILD_WIDE
 
 }  // namespace volley::accel

@@ -44,4 +44,10 @@ simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of,
                            simd::AlignedVector<simd::WideNode<simd::kWideN>>& nodes,
                            simd::AlignedVector<simd::BlockFor<Test, W>>& blocks, simd::WideStats stats);
 
+/// Every block form a wide BVH is built for, X(test, W): each triangle test at each block
+/// width (4: SSE4.2's single-ray kernels, 8: AVX2's and AVX-512's, 16: 16-wide leaves,
+/// which tests build). build_wide's and refit_wide's instantiations are made from it.
+#define VOLLEY_WIDE_BLOCK_FORMS(X) \
+  X(moller, 4) X(moller, 8) X(moller, 16) X(plane, 4) X(plane, 8) X(plane, 16) X(watertight, 4) X(watertight, 8) X(watertight, 16)
+
 }  // namespace volley::accel

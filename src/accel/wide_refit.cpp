@@ -163,15 +163,7 @@ simd::WideStats refit_wide(const float* xyz, const std::uint32_t* index_of, simd
   template simd::WideStats refit_wide<TriangleTest::test, w>(                                        \
       const float*, const std::uint32_t*, simd::AlignedVector<simd::WideNode<N>>&,                  \
       simd::AlignedVector<simd::BlockFor<TriangleTest::test, w>>&, simd::WideStats);
-VOLLEY_REFIT(moller, 4)
-VOLLEY_REFIT(moller, 8)
-VOLLEY_REFIT(moller, 16)
-VOLLEY_REFIT(plane, 4)
-VOLLEY_REFIT(plane, 8)
-VOLLEY_REFIT(plane, 16)
-VOLLEY_REFIT(watertight, 4)
-VOLLEY_REFIT(watertight, 8)
-VOLLEY_REFIT(watertight, 16)
+VOLLEY_WIDE_BLOCK_FORMS(VOLLEY_REFIT)
 #undef VOLLEY_REFIT
 
 }  // namespace volley::accel

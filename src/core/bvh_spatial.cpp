@@ -24,10 +24,14 @@
 #include <vector>
 
 #include "core/bvh.h"
-#include "core/triangle_clip.h"
+#include "core/bvh_spatial_bins.h"
 
 namespace volley::core {
 namespace {
+
+using spatial::bin_of;
+using spatial::chop;
+using spatial::Grid;
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 // Bins of the spatial split per axis (over the node's box, not its centroids).
@@ -52,13 +56,6 @@ struct Ref {
 };
 
 float area(const BBox& b) { return b.half_area(); }
-
-// Bin f (a position in bin units) of nb, clamped; NaN (0 * inf of a tiny extent) and
-// below 0 give 0, so that no float outside int's range is converted.
-int bin_of(float f, int nb) {
-  if (!(f > 0.0f)) return 0;
-  return f < static_cast<float>(nb) ? static_cast<int>(f) : nb - 1;
-}
 
 // A subtree built by one task: nodes[0] is its root, child indices local; its leaves'
 // references in `prims` (first_or_child local to it too).
@@ -228,20 +225,6 @@ class SpatialBuilder {
     }
   }
 
-  // The spatial bins of a node: `nb` slabs of equal width over its box on each axis.
-  struct Grid {
-    BBox box;
-    int nb;
-    // The plane after bin b on `axis` (b = nb: the box's upper face).
-    float plane(int axis, int b) const {
-      if (b >= nb) return box.hi[axis];
-      return box.lo[axis] + (box.hi[axis] - box.lo[axis]) * (static_cast<float>(b) / static_cast<float>(nb));
-    }
-    int bin(int axis, float x) const {
-      const float extent = box.hi[axis] - box.lo[axis];
-      return bin_of((x - box.lo[axis]) * (static_cast<float>(nb) / extent), nb);
-    }
-  };
   Grid grid_of(const BBox& box, std::size_t count) const {
     return {box, count <= kSmallNode ? kSmallNodeSpatialBins : kSpatialBins};
   }
@@ -268,26 +251,6 @@ class SpatialBuilder {
       sweep(bins, enter, leave, grid.nb, axis, true, best);
     }
     return best;
-  }
-
-  // Extends bins[first .. last] of `grid` by the parts of triangle v within `ref` that
-  // fall in them. Each part is bounded by the triangle's vertices in its bin and the points
-  // where the edges cross the bin's two planes; every plane's crossings are computed once,
-  // in float: the bins only price the split (spatial_partition cuts the references it makes
-  // conservatively).
-  static void chop(const glm::vec3* v, const BBox& ref, const Grid& grid, int axis, int first, int last, BBox* bins) {
-    int vertex_bin[3];
-    for (int k = 0; k < 3; ++k) vertex_bin[k] = std::clamp(grid.bin(axis, v[k][axis]), first, last);
-    BBox below;  // the crossings of the plane below bin b (none below the first)
-    for (int b = first; b <= last; ++b) {
-      const BBox above = b < last ? plane_crossings(v, axis, grid.plane(axis, b + 1)) : BBox{};
-      BBox part = below;
-      part.extend(above);
-      for (int k = 0; k < 3; ++k)
-        if (vertex_bin[k] == b) part.extend(v[k]);
-      bins[b].extend(box_intersection(part, ref));
-      below = above;
-    }
   }
 
   // References wholly below the plane go left, wholly above right; a straddling one is cut
