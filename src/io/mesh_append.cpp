@@ -1,6 +1,9 @@
 #include "io/mesh_append.h"
 
+#include <cmath>
 #include <string>
+
+#include "io/load_error.h"
 
 namespace volley::io {
 
@@ -12,6 +15,16 @@ Material default_material() {
   m.specular = glm::vec3(0.1f);
   m.shininess = 32.0f;
   return m;
+}
+
+void transform_positions(const std::filesystem::path& file, const glm::mat4& transform,
+                         std::vector<glm::vec3>& positions, std::size_t first_number) {
+  if (transform == glm::mat4(1.0f)) return;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
+    if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
+      throw LoadError(file, "vertex " + std::to_string(i + first_number) + " is not finite after the object transform");
+  }
 }
 
 std::uint32_t ensure_default_material(std::vector<Material>& materials) {

@@ -255,18 +255,6 @@ void check_forward_refs(const std::filesystem::path& file, const ObjParser& obj)
   }
 }
 
-/// The positions moved by the object transform, each checked finite (the identity is
-/// skipped so that coordinates stay bit-exact).
-void transform_positions(const std::filesystem::path& file, const glm::mat4& transform,
-                         std::vector<glm::vec3>& positions) {
-  if (transform == glm::mat4(1.0f)) return;
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
-    if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
-      throw LoadError(file, "vertex " + std::to_string(i + 1) + " is not finite after the object transform");
-  }
-}
-
 /// The file's vn normals moved by the transform's normal matrix, unit length; 0 where a
 /// normal is zero or not finite (its corners take the face normal).
 std::vector<glm::vec3> unit_normals(const ObjParser& obj, const glm::mat4& transform) {
@@ -338,7 +326,7 @@ void load_obj(const std::filesystem::path& file, const glm::mat4& transform,
   check_forward_refs(file, obj);
   if (into.mesh.positions.size() + obj.positions.size() >= kNone)
     throw LoadError(file, "too many vertices in the scene (more than 2^32 - 1)");
-  transform_positions(file, transform, obj.positions);
+  transform_positions(file, transform, obj.positions, 1);
 
   // Everything below only appends; the material indices come first, since reading the
   // MTL is the last step that may throw.

@@ -296,17 +296,6 @@ void read_element(Tokenizer& in, const Element& e, std::size_t vertex_count, Ply
   }
 }
 
-/// The positions moved by the object transform, each checked finite.
-void transform_positions(const std::filesystem::path& file, const glm::mat4& transform,
-                         std::vector<glm::vec3>& positions) {
-  if (transform == glm::mat4(1.0f)) return;
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    positions[i] = glm::vec3(transform * glm::vec4(positions[i], 1.0f));
-    if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) || !std::isfinite(positions[i].z))
-      throw LoadError(file, "vertex " + std::to_string(i) + " is not finite after the object transform");
-  }
-}
-
 /// The body's triangles appended to the scene's mesh with one material.
 void commit(const PlyBody& body, std::uint32_t material, MeshDesc& mesh) {
   const std::size_t base = mesh.positions.size();
@@ -341,7 +330,7 @@ void load_ply(const std::filesystem::path& file, const glm::mat4& transform,
 
   if (into.mesh.positions.size() + body.positions.size() >= 0xffffffffu)
     throw LoadError(file, "too many vertices in the scene (more than 2^32 - 1)");
-  transform_positions(file, transform, body.positions);
+  transform_positions(file, transform, body.positions, 0);
   commit(body, material_override ? *material_override : ensure_default_material(into.materials), into.mesh);
 }
 
