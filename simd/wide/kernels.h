@@ -2,7 +2,9 @@
 // packets of 16 rays, any-hit packets of 32 on AVX2; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
 // leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its
 // walks share. The bodies are in the files beside this one, one concept each:
-//   queries.h       what is asked: each query's leaf action and termination rule
+//   query_protocol.h  what a walk asks of a query (the concepts each walk checks)
+//   queries.h, packet_queries.h, stream_queries.h
+//                   what is asked: each query's leaf action and termination rule
 //   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8)
 //   stack.h         stack entries, the near-to-far sort, lane reductions
 //   packet_lanes.h  a packet's lanes and the per-lane box test of one child
