@@ -9,7 +9,6 @@
 #include <cmath>
 #include <mutex>
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -34,7 +33,8 @@ glm::vec2 jitter(int sample, int spp, Rng& rng) {
 }
 
 // Buffers of one tile, reused across samples and bounces.
-struct TileWork {
+// One per arena slot, on its own cache lines: the slots write their stats once per tile.
+struct alignas(64) TileWork {
   std::vector<PathState> paths, next;
   std::vector<ShadowQuery> shadows, passing;
   std::vector<Ray> rays;
@@ -176,15 +176,17 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const Pipeline pipeline{stages, shade, batch_shadable(stages), lanes};
   std::mutex merge;
   int done = 0;
-  tbb::enumerable_thread_specific<TileWork> work_per_thread;
   const auto start = std::chrono::steady_clock::now();
   const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
   tbb::task_arena arena(threads);
+  // Scratch per arena slot in plain std allocations, not tbb::enumerable_thread_specific, whose
+  // allocator ThreadSanitizer cannot see (a reused block reads as a race between two renders).
+  std::vector<TileWork> work_per_slot(static_cast<std::size_t>(threads));
   arena.execute([&] {
     tbb::parallel_for(
         0, tile_count,
         [&](int tile) {
-          TileWork& work = work_per_thread.local();
+          TileWork& work = work_per_slot[std::size_t(tbb::this_task_arena::current_thread_index())];
           work.stats = RayStats{};
           render_tile(scene, options, pipeline, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, work,
                       result.image);
