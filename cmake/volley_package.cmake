@@ -96,6 +96,7 @@ install(FILES
   ${PROJECT_SOURCE_DIR}/src/volley/ray.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley_masked.h
+  ${PROJECT_SOURCE_DIR}/src/volley/volley_excluding.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley_queries.h
   ${PROJECT_SOURCE_DIR}/src/volley/volley_types.h
   ${PROJECT_SOURCE_DIR}/src/volley/point.h

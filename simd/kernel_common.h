@@ -55,6 +55,14 @@ std::uint32_t bits_from_mask(MaskB<Arch> m) {
   }
 }
 
+/// Lanes of `block` whose triangle id is not `prim`: the excluding queries' filter (a ray
+/// that leaves its own triangle skips it by id, not by an offset of its origin).
+template <class Arch, class Block>
+[[gnu::always_inline]] inline MaskB<Arch> lanes_other_than(const Block& block, std::uint32_t prim) {
+  const IntB<Arch> ids = IntB<Arch>::load_aligned(reinterpret_cast<const std::int32_t*>(block.prim));
+  return xsimd::bool_cast(ids != IntB<Arch>(static_cast<std::int32_t>(prim)));
+}
+
 /// Bit i set when lane i of x has its sign bit set (-0 and negative NaNs included).
 template <class Arch>
 std::uint32_t sign_bits(FloatB<Arch> x) {

@@ -25,14 +25,17 @@ struct RayBlockKernels {
   /// passes the edge tests: the walk's choice, since a leaf the walk reaches holds triangles
   /// near the ray and that branch mispredicts; with random blocks, as in the kernel
   /// benchmarks, the exit wins, so the standalone forms keep it (perf/traversal.md).
-  template <bool EarlyExit = true>
+  /// Excludes: the triangle whose id is `excluded` is never hit (the excluding queries).
+  template <bool EarlyExit = true, bool Excludes = false>
   [[gnu::always_inline]] inline static void intersect_inline(const PreparedRay& ray, const Block* blocks,
-                                                             std::uint32_t count, Hit& hit);
+                                                             std::uint32_t count, Hit& hit,
+                                                             std::uint32_t excluded = kInvalidPrim);
   /// True when some triangle of blocks[0 .. count) is hit with tmin <= t < ray.tmax.
   static bool occluded(const PreparedRay& ray, const Block* blocks, std::uint32_t count);
-  /// The same, inlined into the caller (as intersect_inline).
+  /// The same, inlined into the caller (as intersect_inline; Excludes as there).
+  template <bool Excludes = false>
   [[gnu::always_inline]] inline static bool occluded_inline(const PreparedRay& ray, const Block* blocks,
-                                                            std::uint32_t count);
+                                                            std::uint32_t count, std::uint32_t excluded = kInvalidPrim);
   /// Every triangle of blocks[0 .. count) hit with tmin <= t < ray.tmax by the crossing
   /// test (detail::CrossingTestOf): calls sink(prim, t, u, v) for each, in lane order.
   template <class Sink>
@@ -80,9 +83,9 @@ void RayBlockKernels<Arch, Test>::intersect(const PreparedRay& ray, const Block*
 }
 
 template <class Arch, TriangleTest Test>
-template <bool EarlyExit>
+template <bool EarlyExit, bool Excludes>
 void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const Block* blocks,
-                                                   std::uint32_t count, Hit& hit) {
+                                                   std::uint32_t count, Hit& hit, std::uint32_t excluded) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   static_assert(B::size == W, "kLanes<Arch> must be the float lane count");
@@ -100,6 +103,7 @@ void RayBlockKernels<Arch, Test>::intersect_inline(const PreparedRay& ray, const
     typename T::Cand cand;
     std::uint32_t bits;
     detail::BlockTest<Arch, T, EarlyExit>::run(rays, block, upper_b, cand, bits);
+    if constexpr (Excludes) bits &= detail::bits_from_mask<Arch>(detail::lanes_other_than<Arch>(block, excluded));
     if (bits == 0) continue;
     alignas(64) float ts[W], us[W], vs[W], dens[W];
     cand.t.store_aligned(ts);
@@ -154,7 +158,9 @@ bool RayBlockKernels<Arch, Test>::occluded(const PreparedRay& ray, const Block* 
 }
 
 template <class Arch, TriangleTest Test>
-bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const Block* blocks, std::uint32_t count) {
+template <bool Excludes>
+bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const Block* blocks, std::uint32_t count,
+                                                  std::uint32_t excluded) {
   using T = detail::TestOf<Arch, Test>;
   using B = detail::FloatB<Arch>;
   const auto rays = T::broadcast(ray);
@@ -168,9 +174,14 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     const auto sure = T::sure_range(ray);
     for (std::uint32_t b = 0; b < count; ++b) {
       const auto d = T::template depth<false>(rays, T::load_block(blocks[b], rays));
-      const auto cand = T::prefilter(rays, d, upper);
+      auto cand = T::prefilter(rays, d, upper);
+      if constexpr (Excludes) cand = cand & detail::lanes_other_than<Arch>(blocks[b], excluded);
       if (xsimd::none(cand)) continue;
-      if (xsimd::any(T::sure_hit(d, sure))) return true;
+      if constexpr (Excludes) {
+        if (xsimd::any(T::sure_hit(d, sure) & cand)) return true;
+      } else {
+        if (xsimd::any(T::sure_hit(d, sure))) return true;
+      }
       std::uint32_t bits = detail::bits_from_mask<Arch>(cand);
       alignas(64) float ts[W], dens[W];
       d.ts.store_aligned(ts);
@@ -184,9 +195,12 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     return false;
   } else {
     for (std::uint32_t b = 0; b < count; ++b) {
-      const auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+      auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+      if constexpr (Excludes) cand.valid = cand.valid & detail::lanes_other_than<Arch>(blocks[b], excluded);
       if (xsimd::none(cand.valid)) continue;
-      if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper))) return true;
+      auto confirmed = detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper);
+      if constexpr (Excludes) confirmed = confirmed & cand.valid;
+      if (xsimd::any(confirmed)) return true;
     }
     return false;
   }

@@ -78,9 +78,11 @@ release the GIL and use all cores (nthreads=0) or nthreads threads.)doc")
       .def("disable_geometry", &RaycastingScene::disable_geometry, py::arg("geometry"))
       .def("enable_geometry", &RaycastingScene::enable_geometry, py::arg("geometry"))
       .def("cast_rays", &RaycastingScene::cast_rays, py::arg("rays"), py::arg("nthreads") = 0, py::arg("masks") = py::none(),
+           py::arg("exclude") = py::none(),
            "Closest hits: dict of t_hit, geometry_ids, primitive_ids, primitive_uvs, primitive_normals.")
       .def("test_occlusions", &RaycastingScene::test_occlusions, py::arg("rays"), py::arg("tnear") = 0.0f,
-           py::arg("tfar") = inf, py::arg("nthreads") = 0, py::arg("masks") = py::none(), "Whether anything lies on each ray in [tnear, tfar): bool array.")
+           py::arg("tfar") = inf, py::arg("nthreads") = 0, py::arg("masks") = py::none(),
+           py::arg("exclude") = py::none(), "Whether anything lies on each ray in [tnear, tfar): bool array.")
       .def("count_intersections", &RaycastingScene::count_intersections, py::arg("rays"), py::arg("nthreads") = 0,
            py::arg("masks") = py::none(),
            "Every surface crossing along each ray, each shared edge or vertex counted once: int32 array.")

@@ -45,8 +45,20 @@ struct RaysIn {
   std::size_t n = 0;
   IndexArray mask_array;
   const std::uint32_t* masks = nullptr;
+  /// (geometry, primitive, instance) per ray when `exclude` is not None (the excluding forms).
+  IndexArray exclude_array;
+  const std::uint32_t* exclude = nullptr;
 };
-RaysIn rays_in(const py::handle& rays, int nthreads, const py::object& masks) {
+
+/// The excluded hits of rays [b, b + m) from RaysIn::exclude, into `out`.
+void excluded_hits(const std::uint32_t* exclude, std::size_t b, std::size_t m, Hit* out) {
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::uint32_t* e = exclude + 3 * (b + i);
+    out[i] = Hit{kInf, 0.0f, 0.0f, e[1], e[0], e[2]};
+  }
+}
+RaysIn rays_in(const py::handle& rays, int nthreads, const py::object& masks,
+               const py::object& exclude = py::none()) {
   check_threads(nthreads);
   RaysIn in;
   in.rows = as_float_rows(rays, "rays", 6, in.lead);
@@ -56,6 +68,12 @@ RaysIn rays_in(const py::handle& rays, int nthreads, const py::object& masks) {
     if (!in.mask_array || std::size_t(in.mask_array.size()) != in.n)
       throw py::value_error("masks: expected one uint32 mask per ray (" + std::to_string(in.n) + ")");
     in.masks = in.mask_array.data();
+  }
+  if (!exclude.is_none()) {
+    in.exclude_array = IndexArray::ensure(exclude);
+    if (!in.exclude_array || std::size_t(in.exclude_array.size()) != 3 * in.n)
+      throw py::value_error("exclude: expected (geometry, primitive, instance) per ray (" + std::to_string(in.n) + ")");
+    in.exclude = in.exclude_array.data();
   }
   return in;
 }
@@ -165,8 +183,9 @@ const Accel& RaycastingScene::committed() {
   return accel_;
 }
 
-py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const py::object& masks) {
-  const RaysIn in = rays_in(rays, nthreads, masks);
+py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const py::object& masks,
+                                    const py::object& exclude) {
+  const RaysIn in = rays_in(rays, nthreads, masks, exclude);
   const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
@@ -181,8 +200,13 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const 
       // Uninitialised: the stream call writes every hit, misses included.
       alignas(64) unsigned char storage[kPiece * sizeof(Hit)];
       Hit* hits = reinterpret_cast<Hit*>(storage);
-      if (in.masks) accel.intersect(piece, in.masks + b, m, hits, 1);
-      else accel.intersect(piece, m, hits, 1);
+      if (in.exclude) {
+        Hit excluded[kPiece];
+        excluded_hits(in.exclude, b, m, excluded);
+        accel.intersect(piece, m, hits, QueryArguments{in.masks ? in.masks + b : nullptr, excluded, 1});
+      } else {
+        accel.intersect(piece, m, hits, QueryArguments{in.masks ? in.masks + b : nullptr, nullptr, 1});
+      }
       write_hits(accel, hits, b, m, columns);
     });
   }
@@ -193,8 +217,8 @@ py::dict RaycastingScene::cast_rays(const py::handle& rays, int nthreads, const 
 }
 
 py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads,
-                                           const py::object& masks) {
-  const RaysIn in = rays_in(rays, nthreads, masks);
+                                           const py::object& masks, const py::object& exclude) {
+  const RaysIn in = rays_in(rays, nthreads, masks, exclude);
   const std::vector<py::ssize_t>& lead = in.lead;
   const std::size_t n = in.n;
   const Accel& accel = committed();
@@ -205,8 +229,9 @@ py::array RaycastingScene::test_occlusions(const py::handle& rays, float tnear, 
     static_assert(sizeof(bool) == 1, "numpy bool is one byte");
     for_ray_pieces(in.rows.data(), n, nthreads, tnear, tfar, [&](const Ray* piece, std::size_t b, std::size_t m) {
       auto* blocked = reinterpret_cast<std::uint8_t*>(po + b);
-      if (in.masks) accel.occluded(piece, in.masks + b, m, blocked, 1);
-      else accel.occluded(piece, m, blocked, 1);
+      Hit excluded[kPiece];
+      if (in.exclude) excluded_hits(in.exclude, b, m, excluded);
+      accel.occluded(piece, m, blocked, QueryArguments{in.masks ? in.masks + b : nullptr, in.exclude ? excluded : nullptr, 1});
     });
   }
   return out;

@@ -34,8 +34,9 @@ class RaycastingScene {
 
   /// The ray queries; `masks`: None, or one uint32 mask per ray (a ray sees a geometry
   /// when their masks share a bit).
-  py::dict cast_rays(const py::handle& rays, int nthreads, const py::object& masks);
-  py::array test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads, const py::object& masks);
+  py::dict cast_rays(const py::handle& rays, int nthreads, const py::object& masks, const py::object& exclude);
+  py::array test_occlusions(const py::handle& rays, float tnear, float tfar, int nthreads, const py::object& masks,
+                            const py::object& exclude);
   py::array count_intersections(const py::handle& rays, int nthreads, const py::object& masks);
   py::dict list_intersections(const py::handle& rays, int nthreads, const py::object& masks);
   py::dict compute_closest_points(const py::handle& points, int nthreads);

@@ -195,7 +195,7 @@ def test_every_method_has_a_signature_and_a_docstring():
     assert list(inspect.signature(volley.RaycastingScene.compute_occupancy).parameters) == [
         "self", "query_points", "nthreads", "nsamples"]
     occlusions = inspect.signature(volley.RaycastingScene.test_occlusions).parameters
-    assert list(occlusions) == ["self", "rays", "tnear", "tfar", "nthreads", "masks"]  # Open3D's, then volley's
+    assert list(occlusions) == ["self", "rays", "tnear", "tfar", "nthreads", "masks", "exclude"]  # Open3D's, then volley's
     assert occlusions["masks"].kind == inspect.Parameter.KEYWORD_ONLY
     init = inspect.signature(volley.RaycastingScene.__init__).parameters
     assert [p.kind for p in init.values()][3:] == [inspect.Parameter.KEYWORD_ONLY] * 3

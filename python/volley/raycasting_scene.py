@@ -66,6 +66,36 @@ def _ray_arguments(rays, nthreads, masks):
     return rays, _ray_masks(masks, rays)
 
 
+def _ray_exclusions(exclude, rays):
+    """None, or `exclude` as a C-ordered (n, 3) uint32 array of (geometry, primitive,
+    instance) per ray of `rays` (..., 6): from a dict with geometry_ids and primitive_ids
+    (such as cast_rays' answer) and optionally instance_ids, each of shape (...)."""
+    if exclude is None:
+        return None
+    if not hasattr(exclude, "__getitem__") or isinstance(exclude, (str, bytes)):
+        raise ValueError("exclude: expected a dict with geometry_ids and primitive_ids "
+                         "(a cast_rays answer), got " + type(exclude).__name__)
+    lead = np.shape(rays)[:-1]
+    columns = []
+    for key, needed in (("geometry_ids", True), ("primitive_ids", True), ("instance_ids", False)):
+        try:
+            column = exclude[key]
+        except (KeyError, IndexError, TypeError):
+            if needed:
+                raise ValueError(f"exclude: no {key} (pass a cast_rays answer, or a dict of "
+                                 "geometry_ids and primitive_ids, one per ray)") from None
+            column = np.full(lead, _volley.INVALID_ID, np.uint32)
+        c = as_array(column, f"exclude['{key}']")
+        if c.dtype.kind not in "iu":
+            raise ValueError(f"exclude['{key}']: expected integer ids, got dtype {c.dtype}")
+        if c.shape != lead:
+            raise ValueError(f"exclude['{key}']: expected one id per ray, shape {lead}, got {c.shape}")
+        if c.size and (int(c.min()) < 0 or int(c.max()) > 0xFFFFFFFF):
+            raise ValueError(f"exclude['{key}']: expected ids in [0, 2**32 - 1] (INVALID_ID: none)")
+        columns.append(np.asarray(c, np.uint32).reshape(-1))
+    return np.ascontiguousarray(np.stack(columns, axis=1))
+
+
 def _ray_masks(masks, rays):
     """None, or `masks` as a C-ordered uint32 array of one mask per ray of `rays` (..., 6)."""
     if masks is None:
@@ -181,7 +211,7 @@ class RaycastingScene:
         return self._engine.enable_geometry(geometry_id)
 
     # --- Ray queries ----------------------------------------------------------------
-    def cast_rays(self, rays, nthreads=0, *, masks=None):
+    def cast_rays(self, rays, nthreads=0, *, masks=None, exclude=None):
         """The closest hit of each ray.
 
         Args:
@@ -189,6 +219,10 @@ class RaycastingScene:
             nthreads: 0 (default) for all cores, or a thread count.
             masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
                 geometries whose mask (set_geometry_mask) shares a bit with its own.
+            exclude: (keyword only) one primitive per ray that the ray passes over: a dict
+                of geometry_ids and primitive_ids of shape (...), such as the cast_rays
+                answer whose hit points the rays start from (an INVALID_ID primitive leaves
+                nothing out). Secondary rays then need no offset of their origins.
 
         Returns:
             dict of t_hit (...) float32 (inf for a miss; in units of the direction's
@@ -197,9 +231,9 @@ class RaycastingScene:
             (zeros for a miss).
         """
         rays, masks = _ray_arguments(rays, nthreads, masks)
-        return self._engine.cast_rays(rays, nthreads, masks)
+        return self._engine.cast_rays(rays, nthreads, masks, _ray_exclusions(exclude, rays))
 
-    def test_occlusions(self, rays, tnear=0.0, tfar=_INF, nthreads=0, *, masks=None):
+    def test_occlusions(self, rays, tnear=0.0, tfar=_INF, nthreads=0, *, masks=None, exclude=None):
         """Whether anything lies on each ray between tnear and tfar.
 
         Args:
@@ -210,12 +244,15 @@ class RaycastingScene:
             nthreads: 0 (default) for all cores, or a thread count.
             masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
                 geometries whose mask (set_geometry_mask) shares a bit with its own.
+            exclude: (keyword only) one primitive per ray that the ray passes over, as
+                cast_rays' (shadow rays from hit points with tnear = 0).
 
         Returns:
             (...) bool.
         """
         rays, masks = _ray_arguments(rays, nthreads, masks)
-        return self._engine.test_occlusions(rays, float(tnear), float(tfar), nthreads, masks)
+        return self._engine.test_occlusions(rays, float(tnear), float(tfar), nthreads, masks,
+                                            _ray_exclusions(exclude, rays))
 
     def count_intersections(self, rays, nthreads=0, *, masks=None):
         """The number of surface crossings along each ray, an edge or vertex shared by

@@ -153,6 +153,10 @@ struct WideKernels {
   static void intersect_erased(const void* bvh, const Ray& ray, Hit& hit);
   /// True when some triangle is hit with ray.tmin <= t < ray.tmax (`bvh` as above).
   static bool occluded_erased(const void* bvh, const Ray& ray);
+  /// The two above with the triangle whose id is `excluded` left out (kInvalidPrim: none):
+  /// the answers of the same walk over a tree without it.
+  static void intersect_excluding_erased(const void* bvh, const Ray& ray, std::uint32_t excluded, Hit& hit);
+  static bool occluded_excluding_erased(const void* bvh, const Ray& ray, std::uint32_t excluded);
   /// Every triangle hit with ray.tmin <= t < ray.tmax by the crossing test
   /// (detail::CrossingTestOf), appended to `out` in visiting order (prim = the block's id).
   static void all_hits(const View& bvh, const Ray& ray, std::vector<Hit>& out);

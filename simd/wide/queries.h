@@ -31,20 +31,23 @@ int last_block_triangles(const typename Kernels::Block* blocks, std::uint32_t co
   return used > Kernels::W / 2 ? Kernels::W : used;
 }
 
-/// Closest hit of one ray: every leaf lowers the bound to its nearest hit.
-template <class Kernels>
+/// Closest hit of one ray: every leaf lowers the bound to its nearest hit. Excludes: the
+/// triangle whose id is `excluded` is not hit (the excluding query: a ray leaving a surface
+/// skips the triangle it starts on).
+template <class Kernels, bool Excludes = false>
 struct ClosestHitRay {
   using Leaf = RayBlockKernels<typename Kernels::SingleArch, Kernels::kTest>;
   static constexpr bool kNearFirst = true;
   static constexpr bool kSureRange = false;
   Hit& hit;
+  std::uint32_t excluded = kInvalidPrim;
   bool found = false;
 
   float bound(const Ray& ray) const { return hit.t < ray.tmax ? hit.t : ray.tmax; }
   void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
                                        std::uint32_t count, float& bound) {
-    Leaf::template intersect_inline<false>(pr, blocks, count, hit);
+    Leaf::template intersect_inline<false, Excludes>(pr, blocks, count, hit, excluded);
     if (!(hit.t < bound)) return LeafStep::go_on;
     bound = hit.t;
     found = true;
@@ -53,19 +56,20 @@ struct ClosestHitRay {
   bool answer() const { return found; }
 };
 
-/// Any hit of one ray: the first leaf with a hit ends the walk.
-template <class Kernels>
+/// Any hit of one ray: the first leaf with a hit ends the walk (Excludes as ClosestHitRay's).
+template <class Kernels, bool Excludes = false>
 struct AnyHitRay {
   using Leaf = RayBlockKernels<typename Kernels::SingleArch, Kernels::kTest>;
   static constexpr bool kNearFirst = false;
   static constexpr bool kSureRange = true;
+  std::uint32_t excluded = kInvalidPrim;
   bool occluded = false;
 
   float bound(const Ray& ray) const { return ray.tmax; }
   void node() {}
   [[gnu::always_inline]] LeafStep leaf(const PreparedRay& pr, const typename Kernels::Block* blocks,
                                        std::uint32_t count, float&) {
-    if (!Leaf::occluded_inline(pr, blocks, count)) return LeafStep::go_on;
+    if (!Leaf::template occluded_inline<Excludes>(pr, blocks, count, excluded)) return LeafStep::go_on;
     occluded = true;
     return LeafStep::done;
   }

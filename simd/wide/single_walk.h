@@ -353,6 +353,22 @@ bool WideKernels<Arch, Test, Robust, PK>::occluded_erased(const void* bvh, const
 }
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::intersect_excluding_erased(const void* bvh, const Ray& ray,
+                                                                     std::uint32_t excluded, Hit& hit) {
+  const View& view = *static_cast<const View*>(bvh);
+  detail::ClosestHitRay<WideKernels, true> query{hit, excluded};
+  trace_ray(view, ray, view.root, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+bool WideKernels<Arch, Test, Robust, PK>::occluded_excluding_erased(const void* bvh, const Ray& ray,
+                                                                    std::uint32_t excluded) {
+  const View& view = *static_cast<const View*>(bvh);
+  detail::AnyHitRay<WideKernels, true> query{excluded};
+  return trace_ray(view, ray, view.root, query);
+}
+
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 bool WideKernels<Arch, Test, Robust, PK>::walk_instances(const InstanceView& top, const Ray& ray, float bound,
                                                      InstanceVisit visit, InstanceWalk mode) {
   switch (mode) {

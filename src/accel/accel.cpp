@@ -216,6 +216,14 @@ void stream_pieces(const char* caller, std::size_t count, int threads, Trace&& t
       [&](std::size_t r0, std::size_t r1) { trace(r0 * kRun, std::min(count, r1 * kRun)); }, 64);
 }
 
+/// The arguments of the rays from `first` on.
+QueryArguments offset(const QueryArguments& args, std::size_t first) {
+  QueryArguments out = args;
+  if (out.masks) out.masks += first;
+  if (out.excluded) out.excluded += first;
+  return out;
+}
+
 }  // namespace
 
 void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, int threads) const {
@@ -243,6 +251,32 @@ void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t co
   if (!masks && count != 0) throw Error("occluded: masks is null (pass one mask per ray, or use the call without masks)");
   stream_pieces("occluded", count, threads,
                 [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, masks + b, e - b, blocked + b); });
+}
+
+void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, const QueryArguments& args) const {
+  if (!args.excluded) {
+    if (args.masks) return intersect(rays, args.masks, count, hits, args.threads);
+    return intersect(rays, count, hits, args.threads);
+  }
+  if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  if (count != 0 && (!rays || !hits)) throw Error("intersect: rays or hits is null (pass count of each)");
+  impl_->check_excluded("intersect", args.excluded, count);
+  stream_pieces("intersect", count, args.threads, [&](std::size_t b, std::size_t e) {
+    impl_->intersect_excluding(rays + b, offset(args, b), e - b, hits + b);
+  });
+}
+
+void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, const QueryArguments& args) const {
+  if (!args.excluded) {
+    if (args.masks) return occluded(rays, args.masks, count, blocked, args.threads);
+    return occluded(rays, count, blocked, args.threads);
+  }
+  if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  if (count != 0 && (!rays || !blocked)) throw Error("occluded: rays or blocked is null (pass count of each)");
+  impl_->check_excluded("occluded", args.excluded, count);
+  stream_pieces("occluded", count, args.threads, [&](std::size_t b, std::size_t e) {
+    impl_->occluded_excluding(rays + b, offset(args, b), e - b, blocked + b);
+  });
 }
 
 WalkCounts Accel::walk_counts(const Ray& ray, bool any_hit) const {

@@ -208,8 +208,9 @@ struct Accel::Impl {
   void build_instances();
   /// The nearest hit through the layers' instances at t < hit.t (tmin as the ray's):
   /// overwrites `hit` (complete: inst, geom, prim) and returns true when there is one.
-  bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const;
-  bool occluded_instances(const Ray& ray, std::uint32_t mask) const;
+  /// excluded (or null): the excluding queries' primitive, passed over in its instance.
+  bool intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit, const Hit* excluded = nullptr) const;
+  bool occluded_instances(const Ray& ray, std::uint32_t mask, const Hit* excluded = nullptr) const;
   /// The packet forms (a SIMD ISA; `rays` a widened copy, every lane initialised, inactive
   /// ones inert; its active lanes and tmax are rewritten): the active lanes walk the top
   /// levels together. Closest: lanes with a nearer hit than hits.t get it; occluded:
@@ -228,6 +229,19 @@ struct Accel::Impl {
   void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
   template <int K>
   std::uint32_t occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const;
+  /// The excluding queries (accel_excluding.cpp): as intersect / occluded with the primitive
+  /// `excluded` names (a hit's geom, prim and inst; a miss names none) left out.
+  Hit intersect_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const;
+  bool occluded_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const;
+  /// The internal id of the primitive `excluded` names: kInvalidPrim for a miss or for one
+  /// inside an instance (whose prototype is asked then). Throws Error naming `caller` when
+  /// it names no primitive of this scene.
+  std::uint32_t excluded_id(const char* caller, const Hit& excluded) const;
+  /// excluded_id of excluded[0 .. count), the index named in the error.
+  void check_excluded(const char* caller, const Hit* excluded, std::size_t count) const;
+  /// The batch forms (args.excluded not null; args.masks one per ray or null), ray by ray.
+  void intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, Hit* hits) const;
+  void occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, std::uint8_t* blocked) const;
   /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays, the rest
   /// by the stream walk where the scene allows it and enough are left, else one by one.
   /// masks: one per ray, or null.

@@ -182,14 +182,29 @@ namespace {
 
 }  // namespace
 
-bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit) const {
+namespace {
+
+/// The excluding queries' primitive as the prototype of instance `geometry` names it, or
+/// null when it lies elsewhere.
+const Hit* excluded_in(const Hit* excluded, std::uint32_t geometry, Hit& inner) {
+  if (!excluded || excluded->inst != geometry) return nullptr;
+  inner = *excluded;
+  inner.inst = kInvalidId;
+  return &inner;
+}
+
+}  // namespace
+
+bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit, const Hit* excluded) const {
   bool found = false;
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       const InstanceSlot& in = l.instances[k];
       const Ray local = to_object(in.object_columns, ray, bound);
-      Hit h = in.prototype->intersect(local, mask);
+      Hit inner;
+      const Hit* skip = excluded_in(excluded, in.geometry, inner);
+      Hit h = skip ? in.prototype->intersect_excluding(local, mask, *skip) : in.prototype->intersect(local, mask);
       if (!h.hit()) return false;
       bound = h.t;
       h.inst = in.geometry;
@@ -202,13 +217,15 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
   return found;
 }
 
-bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask) const {
+bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask, const Hit* excluded) const {
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       const InstanceSlot& in = l.instances[k];
       const Ray local = to_object(in.object_columns, ray, bound);
-      return in.prototype->occluded(local, mask);
+      Hit inner;
+      const Hit* skip = excluded_in(excluded, in.geometry, inner);
+      return skip ? in.prototype->occluded_excluding(local, mask, *skip) : in.prototype->occluded(local, mask);
     };
     if (l.instance_tree.walk(simd::InstanceWalk::any, ray, ray.tmax, leaf)) return true;
   }

@@ -32,6 +32,10 @@ class Engine {
   virtual bool intersect(const Ray& ray, Hit& hit) const = 0;
   /// Whether something is hit with tmin <= t < tmax.
   virtual bool occluded(const Ray& ray) const = 0;
+  /// The two above with the primitive of id `excluded` left out (kInvalidPrim: none): the
+  /// answers over the same structure without it (Accel::intersect_excluding).
+  virtual bool intersect_excluding(const Ray& ray, std::uint32_t excluded, Hit& hit) const = 0;
+  virtual bool occluded_excluding(const Ray& ray, std::uint32_t excluded) const = 0;
   /// Closest hits of the active lanes (hits.t bounds each lane like tmax; only lanes with a
   /// nearer hit are written). Inactive lanes are inert (Accel::Impl widens a caller's packet
   /// with inactive lanes into a copy). The default answers lane by lane.

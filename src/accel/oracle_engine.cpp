@@ -15,11 +15,12 @@ class OracleEngine final : public ScalarTriangleEngine<OracleEngine, float> {
  public:
   OracleEngine(TriangleTest test, bool robust) : ScalarTriangleEngine(test, robust) {}
 
-  template <bool AnyHit, bool Robust>
-  bool trace(const core::RayT<float>& r, Hit& hit) const {
+  template <bool AnyHit, bool Robust, bool Excludes>
+  bool trace(const core::RayT<float>& r, Hit& hit, std::uint32_t excluded) const {
     if (bvh_.nodes.empty()) return false;
     const core::WoopRay<float> woop = core::make_woop_ray(r.dir);
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
+      if (passed_over<Excludes>(triangles_.ids[prim], excluded)) return false;
       core::RayT<float> q = r;
       q.tmax = tmax;
       core::TriHit<float> h;

@@ -44,9 +44,10 @@ class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
     core::nearest_walk(bvh_, query, [&](std::uint32_t prim) { core::offer_polygon(query, polygons_[prim], ids_[prim]); });
   }
 
-  template <bool AnyHit, bool Robust>
-  bool trace(const core::RayT<float>& r, Hit& hit) const {
+  template <bool AnyHit, bool Robust, bool Excludes>
+  bool trace(const core::RayT<float>& r, Hit& hit, std::uint32_t excluded) const {
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
+      if (passed_over<Excludes>(ids_[prim], excluded)) return false;
       core::RayT<float> q = r;
       q.tmax = tmax;
       float t;

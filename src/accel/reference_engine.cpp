@@ -19,14 +19,15 @@ class ReferenceEngine final : public ScalarTriangleEngine<ReferenceEngine, doubl
   explicit ReferenceEngine(TriangleTest test) : ScalarTriangleEngine(test, true) {}
 
   /// (Robust is always true: the constructor sets it.)
-  template <bool AnyHit, bool Robust>
-  bool trace(const core::RayT<float>& r, Hit& hit) const {
+  template <bool AnyHit, bool Robust, bool Excludes>
+  bool trace(const core::RayT<float>& r, Hit& hit, std::uint32_t excluded) const {
     if (bvh_.nodes.empty()) return false;
     // The widened ray; q.tmax is the nearest double t so far, so triangles closer together
     // than a float ulp are still ordered by their double distances.
     core::RayT<double> q = core::ray_cast<double>(r);
     const core::WoopRay<double> woop = core::make_woop_ray(q.dir);
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
+      if (passed_over<Excludes>(triangles_.ids[prim], excluded)) return false;
       core::TriHit<double> h;
       if (!test_triangle(q, woop, prim, h)) return false;
       // A double t just below tmax can round onto it: [tmin, tmax) holds for the float t.

@@ -15,27 +15,45 @@
 
 namespace volley::accel {
 
-/// The single-ray queries of an engine whose Derived::trace<AnyHit, Robust>(ray, hit) walks
-/// core/'s binary BVH (Robust: padded slabs, Options::robust). Packets go lane by lane
+/// Whether a scalar walk's leaf passes over the primitive of id `id`: the excluding queries'
+/// rule (Excludes = false: never, and no test is compiled).
+template <bool Excludes>
+[[gnu::always_inline]] inline bool passed_over(std::uint32_t id, std::uint32_t excluded) {
+  return Excludes && id == excluded;
+}
+
+/// The single-ray queries of an engine whose Derived::trace<AnyHit, Robust, Excludes>(ray,
+/// hit, excluded) walks core/'s binary BVH (Robust: padded slabs, Options::robust;
+/// Excludes: the primitive of id `excluded` is passed over). Packets go lane by lane
 /// (Engine's default).
 template <class Derived, class Base>
 class ScalarQueries : public Base {
  public:
   explicit ScalarQueries(bool robust) : robust_(robust) {}
 
-  bool intersect(const Ray& ray, Hit& hit) const override {
-    core::RayT<float> r = to_core(ray);
-    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
-    return robust_ ? self().template trace<false, true>(r, hit) : self().template trace<false, false>(r, hit);
+  bool intersect(const Ray& ray, Hit& hit) const override { return closest<false>(ray, kInvalidPrim, hit); }
+  bool occluded(const Ray& ray) const override { return any<false>(ray, kInvalidPrim); }
+  bool intersect_excluding(const Ray& ray, std::uint32_t excluded, Hit& hit) const override {
+    return closest<true>(ray, excluded, hit);
   }
-  bool occluded(const Ray& ray) const override {
-    Hit unused;
-    const core::RayT<float> r = to_core(ray);
-    return robust_ ? self().template trace<true, true>(r, unused) : self().template trace<true, false>(r, unused);
-  }
+  bool occluded_excluding(const Ray& ray, std::uint32_t excluded) const override { return any<true>(ray, excluded); }
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }
+  template <bool Excludes>
+  bool closest(const Ray& ray, std::uint32_t excluded, Hit& hit) const {
+    core::RayT<float> r = to_core(ray);
+    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
+    return robust_ ? self().template trace<false, true, Excludes>(r, hit, excluded)
+                   : self().template trace<false, false, Excludes>(r, hit, excluded);
+  }
+  template <bool Excludes>
+  bool any(const Ray& ray, std::uint32_t excluded) const {
+    Hit unused;
+    const core::RayT<float> r = to_core(ray);
+    return robust_ ? self().template trace<true, true, Excludes>(r, unused, excluded)
+                   : self().template trace<true, false, Excludes>(r, unused, excluded);
+  }
 
  protected:
   /// Calls leaf(prim) for the primitives of every leaf the ray's box test passes (the

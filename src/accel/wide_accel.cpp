@@ -28,7 +28,9 @@ class WideAccelFor final : public WideAccel {
   /// nodes lane by lane (a node's and a leaf call's fixed work paid once for 32 rays).
   static constexpr bool kDouble = std::is_same_v<Arch, simd::Avx2>;
 
-  WideAccelFor() : WideAccel({&Kernels::intersect_erased, &Kernels::occluded_erased, &view_}) {}
+  WideAccelFor()
+      : WideAccel({&Kernels::intersect_erased, &Kernels::occluded_erased, &Kernels::intersect_excluding_erased,
+                   &Kernels::occluded_excluding_erased, &view_}) {}
   WideAccelFor(const WideAccelFor&) = delete;  // single_ points at view_
   WideAccelFor& operator=(const WideAccelFor&) = delete;
 

@@ -84,6 +84,13 @@ class WideAccel {
   void intersect(const Ray& ray, Hit& hit) const { single_.intersect(single_.bvh, ray, hit); }
   /// Any hit with tmin <= t < tmax.
   bool occluded(const Ray& ray) const { return single_.occluded(single_.bvh, ray); }
+  /// The two above with the triangle of id `excluded` left out (kInvalidPrim: none).
+  void intersect(const Ray& ray, std::uint32_t excluded, Hit& hit) const {
+    single_.intersect_excluding(single_.bvh, ray, excluded, hit);
+  }
+  bool occluded(const Ray& ray, std::uint32_t excluded) const {
+    return single_.occluded_excluding(single_.bvh, ray, excluded);
+  }
   /// Closest hits of the active lanes (hits.t bounds each lane's search; only lanes with a
   /// nearer hit are written).
   virtual void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const = 0;
@@ -111,11 +118,14 @@ class WideAccel {
   virtual void closest_point(core::PointQuery& query) const = 0;
 
  protected:
-  /// The single-ray entries of the kernels (WideKernels::intersect_erased, occluded_erased)
-  /// and the view of the built BVH they take; set by the implementation.
+  /// The single-ray entries of the kernels (WideKernels::intersect_erased, occluded_erased
+  /// and their excluding forms) and the view of the built BVH they take; set by the
+  /// implementation.
   struct SingleRay {
     void (*intersect)(const void* bvh, const Ray& ray, Hit& hit);
     bool (*occluded)(const void* bvh, const Ray& ray);
+    void (*intersect_excluding)(const void* bvh, const Ray& ray, std::uint32_t excluded, Hit& hit);
+    bool (*occluded_excluding)(const void* bvh, const Ray& ray, std::uint32_t excluded);
     const void* bvh;
   };
   explicit WideAccel(SingleRay single) : single_(single) {}

@@ -49,6 +49,14 @@ class WideEngine final : public TriangleEngine {
     return hit.t != before;  // the kernels write only a nearer hit
   }
   bool occluded(const Ray& ray) const override { return accel_->occluded(ray); }
+  bool intersect_excluding(const Ray& ray, std::uint32_t excluded, Hit& hit) const override {
+    const float before = hit.t;
+    accel_->intersect(ray, excluded, hit);
+    return hit.t != before;
+  }
+  bool occluded_excluding(const Ray& ray, std::uint32_t excluded) const override {
+    return accel_->occluded(ray, excluded);
+  }
   void all_hits(const Ray& ray, std::vector<Hit>& out) const override { accel_->all_hits(ray, out); }
   void all_hits(const RayPacket<16>& rays, std::vector<Hit>* out) const override { accel_->all_hits(rays, out); }
   void closest_point(core::PointQuery& query) const override { accel_->closest_point(query); }

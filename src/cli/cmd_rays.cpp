@@ -20,6 +20,8 @@ struct RaysArgs {
   std::string scene;
   std::string workload;
   std::string output;
+  std::string origins;  ///< --origins: the hit each ray leaves (.vhit)
+  bool no_offset = false;
   int width = 0, height = 0, threads = 0;
   long long seed = -1;
   KernelArgs kernel;
@@ -39,6 +41,12 @@ Runner register_rays(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"primary", "shadow", "diffuse"}));
   cmd->add_option("-o,--output", args->output, "Output ray file (.vray)")->required();
+  cmd->add_option("--origins", args->origins,
+                  "Also write the hit each ray leaves (.vhit, one per ray; a miss for primary rays): what\n"
+                  "`volley trace --exclude` takes, so that each ray passes over the triangle it starts on");
+  cmd->add_flag("--no-offset", args->no_offset,
+                "Start shadow and diffuse rays on the hit point itself instead of offsetting them off the\n"
+                "surface by its error bound: such rays hit their own triangle unless traced with --exclude");
   cmd->add_option("--width", args->width, "Image width in pixels (default: the scene's, else 512)")->check(CLI::Range(2, 16384));
   cmd->add_option("--height", args->height, "Image height in pixels (default: the scene's, else 512)")->check(CLI::Range(2, 16384));
   cmd->add_option("--seed", args->seed, "Random seed of the diffuse directions (default: the scene's)")
@@ -56,9 +64,12 @@ Runner register_rays(CLI::App& app) {
 
     const render::Scene scene(desc, width, height, kernel_options(a.kernel));
     const auto start = std::chrono::steady_clock::now();
-    const std::vector<Ray> rays = render::make_workload(scene, workload, seed, a.threads);
+    std::vector<Hit> origins;
+    const render::Spawning spawning{!a.no_offset, a.origins.empty() ? nullptr : &origins};
+    const std::vector<Ray> rays = render::make_workload(scene, workload, seed, a.threads, spawning);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     io::write_rays(a.output, rays);
+    if (!a.origins.empty()) io::write_hits(a.origins, origins);
     if (rays.empty())
       std::fprintf(stderr, "volley: warning: no %s rays: no primary ray hits the scene (is it behind the camera, or "
                    "nearer than its image plane?)\n", a.workload.c_str());
@@ -69,6 +80,7 @@ Runner register_rays(CLI::App& app) {
                 100.0 * double(rays.size()) / double(pixels),
                 workload == render::Workload::diffuse ? (", seed " + std::to_string(seed)).c_str() : "", seconds,
                 a.output.c_str());
+    if (!a.origins.empty()) std::printf("the hit each ray leaves -> %s\n", a.origins.c_str());
     return 0;
   };
 }

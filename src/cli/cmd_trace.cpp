@@ -5,13 +5,15 @@
 //
 //   trace: scene=S rays=N mode=single|packet|stream packet=K test=T isa=I threads=N
 //          occluded=0|1 reps=N best_s=F median_s=F Mrays/s=F hits=N robust=0|1
-//          reference=0|1 mask=M|none query=closest|occluded|count|all normals=0|1  (one line)
+//          reference=0|1 mask=M|none query=closest|occluded|count|all normals=0|1
+//          exclude=FILE|none  (one line)
 //
 // packet is the packet width K in packet mode, 0 otherwise; Mrays/s = rays / best_s;
 // hits counts closest hits, blocked rays with --occluded, or every hit (crossings) with
 // --count and --all; robust=0 with --fast-slabs,
 // reference=1 with --reference, mask the --mask the rays were traced with, normals=1 when
-// --normals computed each hit's normal inside the timing. Keys are only ever added.
+// --normals computed each hit's normal inside the timing, exclude the --exclude hit file whose
+// primitives the rays passed over. Keys are only ever added.
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -47,6 +49,7 @@ struct TraceArgs {
   std::string save;  ///< write the built structure here
   std::string load;  ///< map the structure from here instead of building it
   std::optional<std::uint32_t> mask;  ///< the rays' mask (the masked query forms)
+  std::string exclude;  ///< --exclude: a hit file, one per ray, whose primitives the rays pass over
   bool occluded = false;
   bool count = false;  ///< --count: crossings per ray (.vcnt)
   bool all = false;    ///< --all: every hit per ray (.vall)
@@ -117,10 +120,33 @@ void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* mas
   }
 }
 
-/// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms.
+/// The excluding forms (--exclude: excluded[i] for ray i): single rays, or the batch call of
+/// the stream API per chunk (stream) or on the whole file (batch).
+ChunkTracer make_excluding_tracer(const Accel& accel, const Ray* r, const std::uint32_t* masks, const Hit* excluded,
+                                  bool single, bool occluded, int api_threads) {
+  if (single)
+    return [&accel, r, masks, excluded, occluded](std::size_t begin, std::size_t end, Answers& out) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const std::uint32_t mask = masks ? masks[i] : kMaskAll;
+        if (occluded) out.blocked[i] = accel.occluded_excluding(r[i], excluded[i], mask) ? 1 : 0;
+        else out.hits[i] = accel.intersect_excluding(r[i], excluded[i], mask);
+      }
+    };
+  return [&accel, r, masks, excluded, occluded, api_threads](std::size_t begin, std::size_t end, Answers& out) {
+    const QueryArguments args{masks ? masks + begin : nullptr, excluded + begin, api_threads};
+    if (occluded) accel.occluded(r + begin, end - begin, out.blocked.data() + begin, args);
+    else accel.intersect(r + begin, end - begin, out.hits.data() + begin, args);
+  };
+}
+
+/// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms,
+/// `excluded` (one per ray, or null) the excluding forms.
 ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
-                        const std::string& mode, int packet, bool occluded, bool crossings, int threads) {
+                        const Hit* excluded, const std::string& mode, int packet, bool occluded, bool crossings,
+                        int threads) {
   const Ray* r = rays.data();
+  if (excluded)
+    return make_excluding_tracer(accel, r, masks, excluded, mode == "single", occluded, mode == "batch" ? threads : 1);
   if (crossings && (mode == "stream" || mode == "batch") && !masks) {
     // --count on the stream API (Accel::count_intersections on a ray array: runs of rays
     // go as packets), per chunk on the calling thread or the whole file on `threads`.
@@ -241,6 +267,11 @@ Runner register_trace(CLI::App& app) {
                   "Trace every ray with this 32-bit mask (the masked query forms): it hits only objects whose\n"
                   "\"mask\" shares a bit with it")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{0xffffffffu}));
+  cmd->add_option("--exclude", args->exclude,
+                  "A hit file (.vhit) with one hit per ray, such as `trace -o` wrote for the rays these start\n"
+                  "from: each ray passes over the primitive of its hit (the excluding queries; a miss leaves\n"
+                  "nothing out), so rays spawned at hit points need no origin offset. Single, stream or batch mode")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--save", args->save,
                   "Write the built structure to this file (Accel::save), to --load it later instead of building");
   cmd->add_option("--load", args->load,
@@ -259,7 +290,14 @@ Runner register_trace(CLI::App& app) {
     if (a.count && a.mask && a.mode != "single")
       throw UsageError("--count with --mask traces single rays: leave --mode at single");
     if (a.stats && crossings) throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
+    if (!a.exclude.empty() && (crossings || a.mode == "packet" || a.stats))
+      throw UsageError("--exclude has closest-hit and occlusion forms for single rays and arrays: not with --count,\n"
+                       "--all, --stats or --mode packet");
     const std::vector<Ray> rays = io::read_rays(a.rays);
+    const std::vector<Hit> excluded = a.exclude.empty() ? std::vector<Hit>{} : io::read_hits(a.exclude);
+    if (!a.exclude.empty() && excluded.size() != rays.size())
+      throw UsageError("--exclude " + a.exclude + ": " + std::to_string(excluded.size()) + " hits for " +
+                       std::to_string(rays.size()) + " rays in " + a.rays + " (one hit per ray expected)");
     const io::SceneDesc desc = io::load_scene(a.scene, shared_scenes_dir(a.kernel.scenes));
     const render::Scene scene(desc, desc.settings.width, desc.settings.height, kernel_options(a.kernel), a.load);
     const Accel& accel = scene.accel();
@@ -271,7 +309,8 @@ Runner register_trace(CLI::App& app) {
     tbb::task_arena arena(threads);
     const std::vector<std::uint32_t> masks(a.mask ? rays.size() : 0, a.mask.value_or(kMaskAll));
     ChunkTracer trace =
-        make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.mode, a.packet, a.occluded, crossings, threads);
+        make_tracer(accel, rays, a.mask ? masks.data() : nullptr, a.exclude.empty() ? nullptr : excluded.data(), a.mode,
+                    a.packet, a.occluded, crossings, threads);
     if (a.normals) trace = with_normals(accel, std::move(trace), a.mode == "batch" ? threads : 1);
     Answers answers;
     if (a.occluded) answers.blocked.assign(rays.size(), 0);
@@ -302,11 +341,12 @@ Runner register_trace(CLI::App& app) {
     const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
     std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d\n",
+                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d "
+                "exclude=%s\n",
                 a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
                 a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
                 info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query,
-                a.normals ? 1 : 0);
+                a.normals ? 1 : 0, a.exclude.empty() ? "none" : a.exclude.c_str());
     char found[96];
     const double share = rays.empty() ? 0.0 : double(hit_count) / double(rays.size());
     if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -28,9 +29,11 @@ void parallel_chunks(std::size_t count, int threads, const Body& body) {
 }
 
 // Secondary rays from the hits, one optional ray per primary ray, made in parallel and
-// compacted in primary order (so the result does not depend on the thread count).
+// compacted in primary order (so the result does not depend on the thread count); the hit
+// each leaves into `from` when it is not null.
 template <class Make>
-std::vector<Ray> from_hits(std::span<const Ray> primary, std::span<const Hit> hits, const Make& make) {
+std::vector<Ray> from_hits(std::span<const Ray> primary, std::span<const Hit> hits, const Make& make,
+                           std::vector<Hit>* from) {
   if (primary.size() != hits.size())
     throw std::invalid_argument("workload: " + std::to_string(hits.size()) + " hits for " +
                                 std::to_string(primary.size()) + " rays");
@@ -42,8 +45,12 @@ std::vector<Ray> from_hits(std::span<const Ray> primary, std::span<const Hit> hi
   });
   std::vector<Ray> out;
   out.reserve(primary.size());
-  for (std::size_t i = 0; i < primary.size(); ++i)
-    if (keep[i]) out.push_back(candidate[i]);
+  if (from) from->clear();
+  for (std::size_t i = 0; i < primary.size(); ++i) {
+    if (!keep[i]) continue;
+    out.push_back(candidate[i]);
+    if (from) from->push_back(hits[i]);
+  }
   return out;
 }
 
@@ -92,35 +99,43 @@ std::vector<Hit> trace_all(const Accel& accel, std::span<const Ray> rays, int th
   return hits;
 }
 
-std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits) {
+std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits,
+                             const Spawning& spawning) {
   if (scene.lights().empty()) throw Error("the scene has no light: no shadow rays to make");
   const glm::vec3 light = scene.lights().front().position;
   return from_hits(primary, hits, [&](std::size_t i, Ray& out) {
     const SurfacePoint s = scene.surface(primary[i], hits[i]);
     // A light behind the surface (seen from the viewer's side) is never tested.
     if (!(glm::dot(light - s.p, s.ng) > 0.0f)) return false;
-    out = spawn_shadow_ray(s.p, s.p_error, s.ng, light);
+    const glm::vec3 d = light - s.p;
+    out = spawning.offset ? spawn_shadow_ray(s.p, s.p_error, s.ng, light) : Ray{{s.p.x, s.p.y, s.p.z}, 0.0f, {d.x, d.y, d.z}, 1.0f};
     return true;
-  });
+  }, spawning.from);
 }
 
 std::vector<Ray> diffuse_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits,
-                              std::uint64_t seed) {
+                              std::uint64_t seed, const Spawning& spawning) {
   return from_hits(primary, hits, [&](std::size_t i, Ray& out) {
     const SurfacePoint s = scene.surface(primary[i], hits[i]);
     Rng rng(seed, i);
     const glm::vec3 w = cosine_direction(s.ns, rng);
     if (!(glm::dot(w, s.ng) > 0.0f)) return false;  // the shading normal sent it below the surface
-    out = spawn_ray(s.p, s.p_error, s.ng, w);
+    out = spawning.offset ? spawn_ray(s.p, s.p_error, s.ng, w)
+                          : Ray{{s.p.x, s.p.y, s.p.z}, 0.0f, {w.x, w.y, w.z}, std::numeric_limits<float>::infinity()};
     return true;
-  });
+  }, spawning.from);
 }
 
-std::vector<Ray> make_workload(const Scene& scene, Workload workload, std::uint64_t seed, int threads) {
+std::vector<Ray> make_workload(const Scene& scene, Workload workload, std::uint64_t seed, int threads,
+                               const Spawning& spawning) {
   std::vector<Ray> primary = primary_rays(scene.camera());
-  if (workload == Workload::primary) return primary;
+  if (workload == Workload::primary) {
+    if (spawning.from) spawning.from->assign(primary.size(), Hit{});  // camera rays leave no surface
+    return primary;
+  }
   const std::vector<Hit> hits = trace_all(scene.accel(), primary, threads);
-  return workload == Workload::shadow ? shadow_rays(scene, primary, hits) : diffuse_rays(scene, primary, hits, seed);
+  return workload == Workload::shadow ? shadow_rays(scene, primary, hits, spawning)
+                                      : diffuse_rays(scene, primary, hits, seed, spawning);
 }
 
 }  // namespace volley::render

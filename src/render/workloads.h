@@ -27,6 +27,16 @@ std::string_view to_string(Workload workload);
 /// Parses a command-line name; std::nullopt for an unknown name.
 std::optional<Workload> parse_workload(std::string_view name);
 
+/// How the secondary rays of a workload leave their hit points.
+struct Spawning {
+  /// Origins offset off the surface by the hit point's error bound (spawn.h), so that no ray
+  /// meets the triangle it leaves; false: origins on the computed hit point itself, for
+  /// the excluding queries, which pass over that triangle by its id (Accel::intersect_excluding).
+  bool offset = true;
+  /// When not null: the hit each ray leaves, one per ray (a miss for primary rays).
+  std::vector<Hit>* from = nullptr;
+};
+
 /// Pixel size of a primary-ray block: any 16 consecutive rays of a block are one packet.
 inline constexpr int kBlock = 4;
 
@@ -52,7 +62,8 @@ std::vector<Hit> trace_all(const Accel& accel, std::span<const Ray> rays, int th
 /// none. Each is spawn_shadow_ray(): origin offset off the surface, direction = light -
 /// origin, interval [0, 1). Order follows the primary rays. Throws volley::Error when the
 /// scene has no light.
-std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits);
+std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits,
+                             const Spawning& spawning = {});
 
 /// Diffuse bounce rays from the hits of `primary`: a unit direction drawn cosine-weighted
 /// about the shading normal (Malley's method), from a PCG32 stream seeded with (seed,
@@ -61,10 +72,11 @@ std::vector<Ray> shadow_rays(const Scene& scene, std::span<const Ray> primary, s
 /// give none. Each is spawn_ray(): offset origin, interval [0, +inf). Order follows the
 /// primary rays.
 std::vector<Ray> diffuse_rays(const Scene& scene, std::span<const Ray> primary, std::span<const Hit> hits,
-                              std::uint64_t seed);
+                              std::uint64_t seed, const Spawning& spawning = {});
 
 /// The whole workload for the scene's camera: primary_rays(), and for shadow / diffuse
 /// their hits (trace_all) turned into secondary rays as above. `threads` as trace_all.
-std::vector<Ray> make_workload(const Scene& scene, Workload workload, std::uint64_t seed, int threads = 0);
+std::vector<Ray> make_workload(const Scene& scene, Workload workload, std::uint64_t seed, int threads = 0,
+                               const Spawning& spawning = {});
 
 }  // namespace volley::render

@@ -159,6 +159,25 @@ class VOLLEY_API Accel {
   /// occluded(ray) for a ray with a mask, as intersect(ray, mask).
   bool occluded(const Ray& ray, std::uint32_t mask) const;
 
+  /// intersect(ray, mask) with one primitive left out: the one `excluded` names by its geom,
+  /// prim and inst (its t, u, v are not read; a miss leaves nothing out). A ray spawned at
+  /// a hit point (tmin = 0) passes over the triangle it leaves by its id instead of an
+  /// offset of its origin. Same answers as intersect(ray, mask) on the scene without that
+  /// primitive (in an instance: without it in that instance only). One primitive is left
+  /// out, not the surface: a ray leaving a point of an edge or vertex it shares with a
+  /// neighbour still meets the neighbour at t = 0. Throws Error when `excluded` names no
+  /// primitive of this scene.
+  Hit intersect_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask = kMaskAll) const;
+  /// occluded(ray, mask) with the primitive `excluded` names left out, as intersect_excluding.
+  bool occluded_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask = kMaskAll) const;
+  /// A batch of `count` rays with what varies between calls in `args` (masks, excluded
+  /// primitives, threads; QueryArguments): hits[i] answers rays[i], as intersect(ray, mask)
+  /// or intersect_excluding(ray, excluded[i], mask). Every excluded hit is checked before
+  /// any answer is written. Throws Error as the forms it stands for.
+  void intersect(const Ray* rays, std::size_t count, Hit* hits, const QueryArguments& args) const;
+  /// Occlusion of a batch (blocked[i] = 1 when rays[i] is blocked), as intersect(rays, count, hits, args).
+  void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, const QueryArguments& args) const;
+
   /// Closest hits of the active lanes of a packet (bit i of rays.active), K = 4, 8 or 16.
   /// Lane i searches tmin <= t < min(tmax, hits.t[i]): reset the hits first with
   /// volley::reset(hits) (t = +inf, prim = kInvalidPrim), or pass earlier answers to bound

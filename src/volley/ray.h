@@ -45,6 +45,19 @@ struct Hit {
 };
 static_assert(sizeof(Hit) == 24, "Hit is a .vhit record");
 
+/// What varies between the calls of a batch query (as Embree 4's RTCIntersectArguments):
+/// Accel::intersect(rays, count, hits, args) and occluded(rays, count, blocked, args).
+struct QueryArguments {
+  /// One ray mask per ray (Accel::set_geometry_mask), or null: every geometry whose mask is not 0.
+  const std::uint32_t* masks = nullptr;
+  /// One hit per ray whose primitive that ray passes over (Accel::intersect_excluding), or
+  /// null: nothing left out.
+  const Hit* excluded = nullptr;
+  /// 0: the caller's oneTBB arena (all cores by default), 1: the calling thread, n > 1:
+  /// exactly n threads. Negative: Error.
+  int threads = 0;
+};
+
 /// What the single-ray walk of the wide BVH visits for one ray (Accel::walk_counts): the
 /// interior nodes whose children it tests, the leaves it opens and the triangles of their
 /// blocks (padding lanes left out).

@@ -277,5 +277,7 @@ VOLLEY_API volley_status volley_validate_rays(const volley_ray* rays, size_t cou
 #include "volley/volley_masked.h"
 /* Queries beyond the first hit: all hits, counts, inside/outside, closest points. */
 #include "volley/volley_queries.h"
+/* The query forms that leave one primitive out (a ray leaving its own triangle). */
+#include "volley/volley_excluding.h"
 
 #endif /* VOLLEY_VOLLEY_H */

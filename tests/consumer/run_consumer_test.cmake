@@ -43,7 +43,7 @@ message(STATUS "installed (then moved to ${prefix}):\n  ${listing}")
 #    and each other (no GLM, xsimd or oneTBB types reach an embedder).
 file(GLOB headers RELATIVE ${prefix}/include/volley ${prefix}/include/volley/*)
 list(SORT headers)
-set(expected_headers accel.h export.h options.h packet.h point.h ray.h volley.h volley_masked.h volley_queries.h volley_types.h)
+set(expected_headers accel.h export.h options.h packet.h point.h ray.h volley.h volley_excluding.h volley_masked.h volley_queries.h volley_types.h)
 if(NOT headers STREQUAL expected_headers)
   message(FATAL_ERROR "include/volley holds [${headers}], expected [${expected_headers}]")
 endif()

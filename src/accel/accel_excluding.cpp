@@ -1,0 +1,90 @@
+// The excluding queries (Accel::intersect_excluding, occluded_excluding): closest and any
+// hit with one primitive left out, named as a hit names it (geometry, primitive, instance).
+// A ray that leaves a surface passes over the triangle it starts on by its id, so it needs
+// no offset of its origin (an epsilon that is too small for far scenes and too large for
+// thin features). The engines pass over the primitive's internal id; an instance's
+// prototype passes over it only for the rays carried through that instance.
+#include <string>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+
+std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) const {
+  if (excluded.prim == kInvalidPrim) return kInvalidPrim;  // a miss excludes nothing
+  const std::string where = std::string(caller) + ": the excluded hit's ";
+  if (excluded.inst != kInvalidId) {
+    if (excluded.inst >= geometries.size() || !geometries[excluded.inst].instance)
+      throw Error(where + "inst " + std::to_string(excluded.inst) + " is not an instance of this scene");
+    Hit inner = excluded;
+    inner.inst = kInvalidId;
+    instances[geometries[excluded.inst].index].prototype->excluded_id(caller, inner);
+    return kInvalidPrim;  // not one of this scene's own primitives
+  }
+  if (excluded.geom >= geometries.size() || geometries[excluded.geom].instance)
+    throw Error(where + "geom " + std::to_string(excluded.geom) + " is not a triangle or polygon geometry of this " +
+                "scene (" + std::to_string(geometries.size()) + " geometry ids)");
+  const Geometry& g = geometries[excluded.geom];
+  if (excluded.prim >= g.count)
+    throw Error(where + "prim " + std::to_string(excluded.prim) + " is not in geometry " +
+                std::to_string(excluded.geom) + " (" + std::to_string(g.count) + " primitives)");
+  return g.first + excluded.prim;
+}
+
+Hit Accel::Impl::intersect_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
+  const std::uint32_t id = excluded_id("intersect_excluding", excluded);
+  Hit hit;
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask)) continue;
+    if (l.triangle_engine) l.triangle_engine->intersect_excluding(ray, id, hit);
+    if (l.polygon_engine) l.polygon_engine->intersect_excluding(ray, id, hit);
+  }
+  attribute(hit.prim, hit.geom);
+  if (has_instances) intersect_instances(ray, mask, hit, &excluded);
+  return hit;
+}
+
+bool Accel::Impl::occluded_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
+  const std::uint32_t id = excluded_id("occluded_excluding", excluded);
+  for (const Layer& l : layers) {
+    if (!(l.mask & mask)) continue;
+    if ((l.triangle_engine && l.triangle_engine->occluded_excluding(ray, id)) ||
+        (l.polygon_engine && l.polygon_engine->occluded_excluding(ray, id)))
+      return true;
+  }
+  return has_instances && occluded_instances(ray, mask, &excluded);
+}
+
+Hit Accel::intersect_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask) const {
+  if (!impl_->committed) throw Error("intersect_excluding: call commit() after adding geometry");
+  return impl_->intersect_excluding(ray, mask, excluded);
+}
+
+bool Accel::occluded_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask) const {
+  if (!impl_->committed) throw Error("occluded_excluding: call commit() after adding geometry");
+  return impl_->occluded_excluding(ray, mask, excluded);
+}
+
+void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
+                                      Hit* hits) const {
+  for (std::size_t i = 0; i < count; ++i)
+    hits[i] = intersect_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]);
+}
+
+void Accel::Impl::occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
+                                     std::uint8_t* blocked) const {
+  for (std::size_t i = 0; i < count; ++i)
+    blocked[i] = occluded_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]) ? 1 : 0;
+}
+
+void Accel::Impl::check_excluded(const char* caller, const Hit* excluded, std::size_t count) const {
+  for (std::size_t i = 0; i < count; ++i) {
+    try {
+      excluded_id(caller, excluded[i]);
+    } catch (const Error& e) {
+      throw Error(std::string(e.what()) + " (excluded[" + std::to_string(i) + "])");
+    }
+  }
+}
+
+}  // namespace volley
