@@ -173,7 +173,7 @@ TEST_CASE("excluding: a ray through an edge shared with the excluded triangle hi
   }
 }
 
-TEST_CASE("excluding: instances leave the primitive out of the named instance only; polygons are excluded too") {
+TEST_CASE("excluding: instances leave the primitive out of the named instance only, and polygons are excluded too") {
   Soup soup;
   soup.add({-1, -1, 0}, {1, -1, 0}, {0, 1, 0});
   Accel proto = soup.accel(TriangleTest::watertight, Isa::automatic);
@@ -205,7 +205,7 @@ TEST_CASE("excluding: instances leave the primitive out of the named instance on
   }
 }
 
-TEST_CASE("excluding: a hit that names nothing is an error naming the field; the C API says so too") {
+TEST_CASE("excluding: a hit that names nothing is an error naming the field, in C too") {
   Soup soup = accel_test::random_soup(20, 1);
   const Accel accel = soup.accel(TriangleTest::watertight, Isa::automatic);
   const Ray r = make_ray({0, 0, -20}, {0, 0, 1});
