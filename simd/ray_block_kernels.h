@@ -175,11 +175,12 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     for (std::uint32_t b = 0; b < count; ++b) {
       const auto d = T::template depth<false>(rays, T::load_block(blocks[b], rays));
       auto cand = T::prefilter(rays, d, upper);
-      if constexpr (Excludes) cand = cand & detail::lanes_other_than<Arch>(blocks[b], excluded);
-      if (xsimd::none(cand)) continue;
       if constexpr (Excludes) {
+        cand = cand & detail::lanes_other_than<Arch>(blocks[b], excluded);
+        if (xsimd::none(cand)) continue;
         if (xsimd::any(T::sure_hit(d, sure) & cand)) return true;
       } else {
+        if (xsimd::none(cand)) continue;
         if (xsimd::any(T::sure_hit(d, sure))) return true;
       }
       std::uint32_t bits = detail::bits_from_mask<Arch>(cand);
@@ -195,12 +196,16 @@ bool RayBlockKernels<Arch, Test>::occluded_inline(const PreparedRay& ray, const 
     return false;
   } else {
     for (std::uint32_t b = 0; b < count; ++b) {
-      auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
-      if constexpr (Excludes) cand.valid = cand.valid & detail::lanes_other_than<Arch>(blocks[b], excluded);
-      if (xsimd::none(cand.valid)) continue;
-      auto confirmed = detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper);
-      if constexpr (Excludes) confirmed = confirmed & cand.valid;
-      if (xsimd::any(confirmed)) return true;
+      if constexpr (Excludes) {
+        auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+        cand.valid = cand.valid & detail::lanes_other_than<Arch>(blocks[b], excluded);
+        if (xsimd::none(cand.valid)) continue;
+        if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper) & cand.valid)) return true;
+      } else {
+        const auto cand = T::test(rays, T::load_block(blocks[b], rays), upper);
+        if (xsimd::none(cand.valid)) continue;
+        if (xsimd::any(detail::confirmed<T>(rays, cand, detail::cand_t<T>(cand), upper))) return true;
+      }
     }
     return false;
   }

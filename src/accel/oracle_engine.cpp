@@ -20,7 +20,9 @@ class OracleEngine final : public ScalarTriangleEngine<OracleEngine, float> {
     if (bvh_.nodes.empty()) return false;
     const core::WoopRay<float> woop = core::make_woop_ray(r.dir);
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
-      if (passed_over<Excludes>(triangles_.ids[prim], excluded)) return false;
+      if constexpr (Excludes) {
+        if (triangles_.ids[prim] == excluded) return false;
+      }
       core::RayT<float> q = r;
       q.tmax = tmax;
       core::TriHit<float> h;

@@ -47,7 +47,9 @@ class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
   template <bool AnyHit, bool Robust, bool Excludes>
   bool trace(const core::RayT<float>& r, Hit& hit, std::uint32_t excluded) const {
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
-      if (passed_over<Excludes>(ids_[prim], excluded)) return false;
+      if constexpr (Excludes) {
+        if (ids_[prim] == excluded) return false;
+      }
       core::RayT<float> q = r;
       q.tmax = tmax;
       float t;

@@ -27,7 +27,9 @@ class ReferenceEngine final : public ScalarTriangleEngine<ReferenceEngine, doubl
     core::RayT<double> q = core::ray_cast<double>(r);
     const core::WoopRay<double> woop = core::make_woop_ray(q.dir);
     return core::traverse<AnyHit, Robust>(bvh_, r, [&](std::uint32_t prim, float& tmax) {
-      if (passed_over<Excludes>(triangles_.ids[prim], excluded)) return false;
+      if constexpr (Excludes) {
+        if (triangles_.ids[prim] == excluded) return false;
+      }
       core::TriHit<double> h;
       if (!test_triangle(q, woop, prim, h)) return false;
       // A double t just below tmax can round onto it: [tmin, tmax) holds for the float t.

@@ -15,13 +15,6 @@
 
 namespace volley::accel {
 
-/// Whether a scalar walk's leaf passes over the primitive of id `id`: the excluding queries'
-/// rule (Excludes = false: never, and no test is compiled).
-template <bool Excludes>
-[[gnu::always_inline]] inline bool passed_over(std::uint32_t id, std::uint32_t excluded) {
-  return Excludes && id == excluded;
-}
-
 /// The single-ray queries of an engine whose Derived::trace<AnyHit, Robust, Excludes>(ray,
 /// hit, excluded) walks core/'s binary BVH (Robust: padded slabs, Options::robust;
 /// Excludes: the primitive of id `excluded` is passed over). Packets go lane by lane
@@ -31,8 +24,18 @@ class ScalarQueries : public Base {
  public:
   explicit ScalarQueries(bool robust) : robust_(robust) {}
 
-  bool intersect(const Ray& ray, Hit& hit) const override { return closest<false>(ray, kInvalidPrim, hit); }
-  bool occluded(const Ray& ray) const override { return any<false>(ray, kInvalidPrim); }
+  bool intersect(const Ray& ray, Hit& hit) const override {
+    core::RayT<float> r = to_core(ray);
+    r.tmax = hit.t < r.tmax ? hit.t : r.tmax;
+    return robust_ ? self().template trace<false, true, false>(r, hit, kInvalidPrim)
+                   : self().template trace<false, false, false>(r, hit, kInvalidPrim);
+  }
+  bool occluded(const Ray& ray) const override {
+    Hit unused;
+    const core::RayT<float> r = to_core(ray);
+    return robust_ ? self().template trace<true, true, false>(r, unused, kInvalidPrim)
+                   : self().template trace<true, false, false>(r, unused, kInvalidPrim);
+  }
   bool intersect_excluding(const Ray& ray, std::uint32_t excluded, Hit& hit) const override {
     return closest<true>(ray, excluded, hit);
   }
