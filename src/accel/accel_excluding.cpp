@@ -12,21 +12,29 @@ namespace volley {
 
 std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) const {
   if (excluded.prim == kInvalidPrim) return kInvalidPrim;  // a miss excludes nothing
-  const std::string where = std::string(caller) + ": the excluded hit's ";
+  if (excluded.inst == kInvalidId && excluded.geom < geometries.size()) {  // the common case, once per ray
+    const Geometry& g = geometries[excluded.geom];
+    if (!g.instance && excluded.prim < g.count) return g.first + excluded.prim;
+  }
+  return excluded_elsewhere(caller, excluded);
+}
+
+std::uint32_t Accel::Impl::excluded_elsewhere(const char* caller, const Hit& excluded) const {
+  const auto where = [caller] { return std::string(caller) + ": the excluded hit's "; };
   if (excluded.inst != kInvalidId) {
     if (excluded.inst >= geometries.size() || !geometries[excluded.inst].instance)
-      throw Error(where + "inst " + std::to_string(excluded.inst) + " is not an instance of this scene");
+      throw Error(where() + "inst " + std::to_string(excluded.inst) + " is not an instance of this scene");
     Hit inner = excluded;
     inner.inst = kInvalidId;
     instances[geometries[excluded.inst].index].prototype->excluded_id(caller, inner);
     return kInvalidPrim;  // not one of this scene's own primitives
   }
   if (excluded.geom >= geometries.size() || geometries[excluded.geom].instance)
-    throw Error(where + "geom " + std::to_string(excluded.geom) + " is not a triangle or polygon geometry of this " +
+    throw Error(where() + "geom " + std::to_string(excluded.geom) + " is not a triangle or polygon geometry of this " +
                 "scene (" + std::to_string(geometries.size()) + " geometry ids)");
   const Geometry& g = geometries[excluded.geom];
   if (excluded.prim >= g.count)
-    throw Error(where + "prim " + std::to_string(excluded.prim) + " is not in geometry " +
+    throw Error(where() + "prim " + std::to_string(excluded.prim) + " is not in geometry " +
                 std::to_string(excluded.geom) + " (" + std::to_string(g.count) + " primitives)");
   return g.first + excluded.prim;
 }
@@ -34,6 +42,11 @@ std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) 
 Hit Accel::Impl::intersect_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
   const std::uint32_t id = excluded_id("intersect_excluding", excluded);
   Hit hit;
+  if (wide_only) {  // one wide BVH of triangles: the kernels directly, as intersect's shortcut
+    if (simple_mask & mask) wide_only->intersect(ray, id, hit);
+    attribute(hit.prim, hit.geom);
+    return hit;
+  }
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
     if (l.triangle_engine) l.triangle_engine->intersect_excluding(ray, id, hit);
@@ -46,6 +59,7 @@ Hit Accel::Impl::intersect_excluding(const Ray& ray, std::uint32_t mask, const H
 
 bool Accel::Impl::occluded_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
   const std::uint32_t id = excluded_id("occluded_excluding", excluded);
+  if (wide_only) return (simple_mask & mask) && wide_only->occluded(ray, id);
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
     if ((l.triangle_engine && l.triangle_engine->occluded_excluding(ray, id)) ||

@@ -237,6 +237,8 @@ struct Accel::Impl {
   /// inside an instance (whose prototype is asked then). Throws Error naming `caller` when
   /// it names no primitive of this scene.
   std::uint32_t excluded_id(const char* caller, const Hit& excluded) const;
+  /// excluded_id for a primitive inside an instance, or for a hit that names nothing (the error).
+  std::uint32_t excluded_elsewhere(const char* caller, const Hit& excluded) const;
   /// excluded_id of excluded[0 .. count), the index named in the error.
   void check_excluded(const char* caller, const Hit* excluded, std::size_t count) const;
   /// The batch forms (args.excluded not null; args.masks one per ray or null), ray by ray.
