@@ -40,15 +40,17 @@ inline constexpr bool kChunksOnTbb = true;
 #endif
 
 /// Calls body(begin, end) over [0, count) in chunks of at least `grain`: on the current
-/// arena (threads = 0), on the calling thread alone (1: chunks of `grain` in order, so that
-/// a chunk's rays and answers stay in the cache between the passes a body makes over them,
-/// as they do on many threads), or on an arena of `threads`. Throws Error naming `caller`
-/// for threads < 0.
+/// arena (threads = 0), on the calling thread alone (1), or on an arena of `threads`.
+/// Throws Error naming `caller` for threads < 0.
 template <class Body>
 void for_chunks(const char* caller, std::size_t count, int threads, Body&& body, std::size_t grain = 256) {
   if (threads < 0) throw Error(std::string(caller) + ": threads must be >= 0 (0: the caller's oneTBB arena)");
   if (count == 0) return;
-  if (threads == 1 || !kChunksOnTbb) {
+  if (threads == 1) {
+    body(std::size_t{0}, count);
+    return;
+  }
+  if constexpr (!kChunksOnTbb) {
     for (std::size_t begin = 0; begin < count; begin += grain) body(begin, begin + grain < count ? begin + grain : count);
     return;
   }
