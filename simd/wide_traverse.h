@@ -11,6 +11,7 @@
 #include "simd/wide/packet_queries.h"
 #include "simd/wide/queries.h"
 #include "simd/wide/query_protocol.h"
+#include "simd/wide/single_entries.h"
 #include "simd/wide/single_walk.h"
 #include "simd/wide/stream_queries.h"
 #include "simd/wide/stream_walk.h"

@@ -45,6 +45,13 @@ HitLists masked_hit_lists(const Accel& accel, const Ray* rays, const std::uint32
   return lists;
 }
 
+void excluded_hits(const std::uint32_t* exclude, std::size_t b, std::size_t m, Hit* out) {
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::uint32_t* e = exclude + 3 * (b + i);
+    out[i] = Hit{kInf, 0.0f, 0.0f, e[1], e[0], e[2]};
+  }
+}
+
 void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out) {
   float* t = out.t_hit + b;
   std::uint32_t* geometry = out.geometry_ids + b;

@@ -50,6 +50,10 @@ void for_ray_pieces(const float* rows, std::size_t n, int nthreads, float tnear,
   });
 }
 
+/// The excluded hits of rays [b, b + m) from rows of (geometry, primitive, instance), into
+/// `out` (the exclude= argument of cast_rays and test_occlusions).
+void excluded_hits(const std::uint32_t* exclude, std::size_t b, std::size_t m, Hit* out);
+
 /// cast_rays' answer arrays (Open3D's names).
 struct HitColumns {
   float* t_hit;

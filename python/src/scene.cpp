@@ -50,13 +50,6 @@ struct RaysIn {
   const std::uint32_t* exclude = nullptr;
 };
 
-/// The excluded hits of rays [b, b + m) from RaysIn::exclude, into `out`.
-void excluded_hits(const std::uint32_t* exclude, std::size_t b, std::size_t m, Hit* out) {
-  for (std::size_t i = 0; i < m; ++i) {
-    const std::uint32_t* e = exclude + 3 * (b + i);
-    out[i] = Hit{kInf, 0.0f, 0.0f, e[1], e[0], e[2]};
-  }
-}
 RaysIn rays_in(const py::handle& rays, int nthreads, const py::object& masks,
                const py::object& exclude = py::none()) {
   check_threads(nthreads);

@@ -8,7 +8,8 @@
 //   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8)
 //   stack.h         stack entries, the near-to-far sort, lane reductions
 //   packet_lanes.h  a packet's lanes and the per-lane box test of one child
-//   single_walk.h   one ray: preparation, the walk, the erased entries
+//   single_walk.h   one ray: preparation and the walk
+//   single_entries.h  the single-ray entries (erased, counts, all hits, instances)
 //   packet_entry.h  packets: the entries and the lane screen that picks a walk
 //   frustum_walk.h  coherent packets: one interval test per node
 //   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
