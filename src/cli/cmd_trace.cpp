@@ -221,14 +221,8 @@ double timed_pass(const ChunkTracer& trace, std::size_t count, int threads, tbb:
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-}  // namespace
-
-Runner register_trace(CLI::App& app) {
-  auto args = std::make_shared<TraceArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "trace",
-      "Trace a ray file (.vray) against a scene and print Mrays/s (best of --reps, intersection\n"
-      "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
+/// The command line's options into `args`.
+void add_trace_options(CLI::App* cmd, TraceArgs* args) {
   cmd->add_option("scene", args->scene, "Scene file (.json) or mesh (.obj, .ply)")->required();
   cmd->add_option("--rays", args->rays, "Ray file (.vray) from `volley rays`")->required();
   cmd->add_option("-o,--output", args->output, "Write the answers: a hit file (.vhit), or .vcnt / .vall with --count / --all");
@@ -279,20 +273,116 @@ Runner register_trace(CLI::App& app) {
                   "ISA are the file's: --test and --isa are ignored)")
       ->check(CLI::ExistingFile);
   add_kernel_options(*cmd, args->kernel);
+}
+
+/// The pairs of options that have no form together: UsageError naming them.
+void check_option_pairs(const TraceArgs& a) {
+  const bool crossings = a.count || a.all;
+  if (a.all && a.mode != "single")
+    throw UsageError("--all traces single rays: leave --mode at single");
+  if (a.count && a.mode == "packet")
+    throw UsageError("--count has no packet form: --mode single, stream or batch");
+  if (a.count && a.mask && a.mode != "single")
+    throw UsageError("--count with --mask traces single rays: leave --mode at single");
+  if (a.stats && crossings) throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
+  if (!a.exclude.empty() && (crossings || a.mode == "packet" || a.stats))
+    throw UsageError("--exclude has closest-hit and occlusion forms for single rays and arrays: not with --count,\n"
+                     "--all, --stats or --mode packet");
+}
+
+/// What the answers found: closest hits, blocked rays, or every hit (crossings).
+std::size_t count_found(const TraceArgs& a, const Answers& answers) {
+  std::size_t hit_count = 0;
+  if (a.occluded) {
+    for (std::uint8_t b : answers.blocked) hit_count += b;
+  } else if (a.count || a.all) {
+    for (std::uint32_t c : answers.counts) hit_count += c;
+    for (const std::vector<Hit>& l : answers.lists) hit_count += l.size();
+  } else {
+    for (const Hit& h : answers.hits) hit_count += h.hit() ? 1 : 0;
+  }
+  return hit_count;
+}
+
+/// The `trace:` line for scripts and the summary for people.
+void print_result(const TraceArgs& a, const AccelInfo& info, std::size_t ray_count, int threads, double best,
+                  double median, std::size_t hit_count) {
+  const bool crossings = a.count || a.all;
+  const char* query = a.occluded ? "occluded" : a.count ? "count" : a.all ? "all" : "closest";
+  const double mrays = best > 0.0 ? double(ray_count) / best * 1e-6 : 0.0;
+  const int packet = a.mode == "packet" ? a.packet : 0;
+  const std::string mode = packet ? "packet" + std::to_string(packet) : a.mode;  // for the summary
+  const std::string test(to_string(info.test)), isa(to_string(info.isa));
+
+  std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
+              "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d "
+              "exclude=%s\n",
+              a.scene.c_str(), ray_count, a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
+              a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
+              info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query,
+              a.normals ? 1 : 0, a.exclude.empty() ? "none" : a.exclude.c_str());
+  char found[96];
+  const double share = ray_count == 0 ? 0.0 : double(hit_count) / double(ray_count);
+  if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);
+  else std::snprintf(found, sizeof found, "%zu %s (%.1f%%)", hit_count, a.occluded ? "blocked" : "hit", 100.0 * share);
+  std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
+              "%.2f Mrays/s; %s; %s %.3f s\n",
+              a.scene.c_str(), ray_count, a.rays.c_str(),
+              a.occluded ? "occlusion" : a.count ? "crossing count" : a.all ? "all hits" : "closest hit", mode.c_str(),
+              test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
+              found, info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
+}
+
+/// An untimed pass of the single-ray walk, counting what it visits (--stats).
+void print_walk_counts(const Accel& accel, const std::vector<Ray>& rays, bool occluded) {
+  WalkCounts sum;
+  for (const Ray& r : rays) {
+    const WalkCounts c = accel.walk_counts(r, occluded);
+    sum.nodes += c.nodes, sum.leaves += c.leaves, sum.triangles += c.triangles;
+  }
+  const double n = rays.empty() ? 1.0 : double(rays.size());
+  std::printf("walk: nodes/ray=%.3f leaves/ray=%.3f triangles/ray=%.3f (the single-ray walk, %s)\n",
+              double(sum.nodes) / n, double(sum.leaves) / n, double(sum.triangles) / n,
+              occluded ? "any hit" : "closest hit");
+}
+
+/// The answers in the file format of the query (-o).
+void write_answers(const TraceArgs& a, const Answers& answers, std::size_t ray_count) {
+  if (a.output.empty()) return;
+  if (a.count) {
+    io::write_counts(a.output, answers.counts);
+  } else if (a.all) {
+    HitLists lists;
+    lists.offsets.push_back(0);
+    for (const std::vector<Hit>& l : answers.lists) {
+      lists.hits.insert(lists.hits.end(), l.begin(), l.end());
+      lists.offsets.push_back(lists.hits.size());
+    }
+    io::write_hit_lists(a.output, lists);
+  } else if (a.occluded) {
+    std::vector<Hit> records(ray_count);
+    for (std::size_t i = 0; i < ray_count; ++i) records[i] = io::occlusion_record(answers.blocked[i] != 0);
+    io::write_hits(a.output, records);
+  } else {
+    io::write_hits(a.output, answers.hits);
+  }
+  std::printf("answers -> %s\n", a.output.c_str());
+}
+
+}  // namespace
+
+Runner register_trace(CLI::App& app) {
+  auto args = std::make_shared<TraceArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "trace",
+      "Trace a ray file (.vray) against a scene and print Mrays/s (best of --reps, intersection\n"
+      "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
+  add_trace_options(cmd, args.get());
 
   return [args]() {
     const TraceArgs& a = *args;
     const bool crossings = a.count || a.all;
-    if (a.all && a.mode != "single")
-      throw UsageError("--all traces single rays: leave --mode at single");
-    if (a.count && a.mode == "packet")
-      throw UsageError("--count has no packet form: --mode single, stream or batch");
-    if (a.count && a.mask && a.mode != "single")
-      throw UsageError("--count with --mask traces single rays: leave --mode at single");
-    if (a.stats && crossings) throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
-    if (!a.exclude.empty() && (crossings || a.mode == "packet" || a.stats))
-      throw UsageError("--exclude has closest-hit and occlusion forms for single rays and arrays: not with --count,\n"
-                       "--all, --stats or --mode packet");
+    check_option_pairs(a);
     const std::vector<Ray> rays = io::read_rays(a.rays);
     const std::vector<Hit> excluded = a.exclude.empty() ? std::vector<Hit>{} : io::read_hits(a.exclude);
     if (!a.exclude.empty() && excluded.size() != rays.size())
@@ -318,7 +408,6 @@ Runner register_trace(CLI::App& app) {
     else if (a.all) answers.lists.resize(rays.size());
     else answers.hits.assign(rays.size(), Hit{});
     if (a.normals) answers.normals.assign(3 * rays.size(), 0.0f);
-    const char* query = a.occluded ? "occluded" : a.count ? "count" : a.all ? "all" : "closest";
 
     std::vector<double> seconds;
     for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers, a.mode == "batch"));
@@ -326,71 +415,11 @@ Runner register_trace(CLI::App& app) {
     const double best = seconds.front();
     const double median = seconds[seconds.size() / 2];
 
-    std::size_t hit_count = 0;
-    if (a.occluded) {
-      for (std::uint8_t b : answers.blocked) hit_count += b;
-    } else if (crossings) {
-      for (std::uint32_t c : answers.counts) hit_count += c;
-      for (const std::vector<Hit>& l : answers.lists) hit_count += l.size();
-    } else {
-      for (const Hit& h : answers.hits) hit_count += h.hit() ? 1 : 0;
-    }
-    const double mrays = best > 0.0 ? double(rays.size()) / best * 1e-6 : 0.0;
-    const int packet = a.mode == "packet" ? a.packet : 0;
-    const std::string mode = packet ? "packet" + std::to_string(packet) : a.mode;  // for the summary
-    const std::string test(to_string(info.test)), isa(to_string(info.isa));
-
-    std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-                "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d "
-                "exclude=%s\n",
-                a.scene.c_str(), rays.size(), a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
-                a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
-                info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query,
-                a.normals ? 1 : 0, a.exclude.empty() ? "none" : a.exclude.c_str());
-    char found[96];
-    const double share = rays.empty() ? 0.0 : double(hit_count) / double(rays.size());
-    if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);
-    else std::snprintf(found, sizeof found, "%zu %s (%.1f%%)", hit_count, a.occluded ? "blocked" : "hit", 100.0 * share);
-    std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
-                "%.2f Mrays/s; %s; %s %.3f s\n",
-                a.scene.c_str(), rays.size(), a.rays.c_str(),
-                a.occluded ? "occlusion" : a.count ? "crossing count" : a.all ? "all hits" : "closest hit", mode.c_str(),
-                test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
-                found, info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
+    const std::size_t hit_count = count_found(a, answers);
+    print_result(a, info, rays.size(), threads, best, median, hit_count);
     if (!a.save.empty()) std::printf("saved the structure to %s\n", a.save.c_str());
-    if (a.stats) {
-      // An untimed pass of the single-ray walk, counting what it visits.
-      WalkCounts sum;
-      for (const Ray& r : rays) {
-        const WalkCounts c = accel.walk_counts(r, a.occluded);
-        sum.nodes += c.nodes, sum.leaves += c.leaves, sum.triangles += c.triangles;
-      }
-      const double n = rays.empty() ? 1.0 : double(rays.size());
-      std::printf("walk: nodes/ray=%.3f leaves/ray=%.3f triangles/ray=%.3f (the single-ray walk, %s)\n",
-                  double(sum.nodes) / n, double(sum.leaves) / n, double(sum.triangles) / n,
-                  a.occluded ? "any hit" : "closest hit");
-    }
-
-    if (!a.output.empty()) {
-      if (a.count) {
-        io::write_counts(a.output, answers.counts);
-      } else if (a.all) {
-        HitLists lists;
-        lists.offsets.push_back(0);
-        for (const std::vector<Hit>& l : answers.lists) {
-          lists.hits.insert(lists.hits.end(), l.begin(), l.end());
-          lists.offsets.push_back(lists.hits.size());
-        }
-        io::write_hit_lists(a.output, lists);
-      } else if (a.occluded) {
-        std::vector<Hit> records(rays.size());
-        for (std::size_t i = 0; i < rays.size(); ++i) records[i] = io::occlusion_record(answers.blocked[i] != 0);
-        io::write_hits(a.output, records);
-      } else {
-        io::write_hits(a.output, answers.hits);
-      }
-      std::printf("answers -> %s\n", a.output.c_str());
-    }
+    if (a.stats) print_walk_counts(accel, rays, a.occluded);
+    write_answers(a, answers, rays.size());
     return 0;
   };
 }
