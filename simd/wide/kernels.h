@@ -5,14 +5,17 @@
 //   query_protocol.h  what a walk asks of a query (the concepts each walk checks)
 //   queries.h, packet_queries.h, stream_queries.h
 //                   what is asked: each query's leaf action and termination rule
-//   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8)
-//   stack.h         stack entries, the near-to-far sort, lane reductions
-//   packet_lanes.h  a packet's lanes and the per-lane box test of one child
-//   single_walk.h   one ray: preparation and the walk
+//   node_lanes.h    the eight child lanes of a node on any ISA (Lanes8, ChildHits)
+//   stack.h         stack entries, the near-to-far sort and pop, lane reductions
+//   packet_lanes.h  a packet's lanes, the per-lane box test of one child, hand-offs
+//   single_walk.h   one ray: preparation and the walk, whose steps are
+//     single_slabs.h  the ray's constants and the node test
+//     child_order.h   the entered children onto the stack, the nearest next
 //   single_entries.h  the single-ray entries (erased, counts, all hits, instances)
 //   packet_entry.h  packets: the entries and the lane screen that picks a walk
 //   frustum_walk.h  coherent packets: one interval test per node
 //   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
+//   stream_walk.h   streams: lists of rays split node by node
 // simd/wide_traverse.h includes them all and declares the per-ISA instantiations.
 //
 // Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
@@ -258,7 +261,7 @@ struct WideKernels {
   /// spread origins (shadow rays from a 4x4 block of hit points, whose interval frustum grows
   /// loose) take the per-lane walk (perf/traversal.md). Returns the lanes the query finished.
   template <class Query, class Leaves>
-  static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
+  [[gnu::always_inline]] inline static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                      const detail::PacketSetup<K>& setup, Query& query);
   /// The per-lane packet walk over prepared lanes (prep.rays.active is rewritten per leaf).
   /// Uniform: every valid lane in one octant. NoZero: and no zero direction component,

@@ -3,11 +3,32 @@
 #pragma once
 #include <immintrin.h>
 
+#include <bit>
+#include <cstdint>
+
 #include "simd/wide/kernels.h"
 
 namespace volley::simd {
 
 namespace detail {
+
+/// The children a node test found entered: bit j of `bits` for child j, and the first one's
+/// reference (0 when none). With mask registers (AVX-512) the entered lanes stay in one and
+/// the node's references in a vector, so the first reference is one vpcompressd: the next
+/// node's address does not wait for movemask, bit scan and a load indexed by it, the
+/// longest chain of the walk (perf/traversal.md).
+template <class Arch, bool Masks = kHasMaskRegisters<Arch>>
+struct ChildHits {
+  std::uint32_t bits;
+  std::uint32_t first_ref;
+};
+template <class Arch>
+struct ChildHits<Arch, true> {
+  std::uint32_t bits;
+  std::uint32_t first_ref;
+  __mmask8 k;
+  __m256i refs;
+};
 
 /// Eight float lanes, one per child of a WideNode<8>: one AVX register (AVX2 and AVX-512,
 /// whose 16 lanes would be half empty), or two SSE registers. Raw intrinsics (always
@@ -41,6 +62,31 @@ struct Lanes8<Arch, true> {
     return static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)));
   }
   static void store(float* p, V a) { _mm256_store_ps(p, a); }
+  /// The children with entry <= exit (false for NaN); `child`: the node's references.
+  static ChildHits<Arch> entered(V entry, V exit, const std::uint32_t* child) {
+    if constexpr (kHasMaskRegisters<Arch>) {
+      const __mmask8 k = _mm256_cmp_ps_mask(entry, exit, _CMP_LE_OQ);
+      const __m256i refs = _mm256_load_si256(reinterpret_cast<const __m256i*>(child));
+      const auto first = static_cast<std::uint32_t>(
+          _mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
+      return {k, first, k, refs};
+    } else {
+      ChildHits<Arch> hits{le(entry, exit), 0};
+      if (hits.bits) hits.first_ref = child[std::countr_zero(hits.bits)];
+      return hits;
+    }
+  }
+  /// Mask registers: the second entered child's reference, and the first two entered
+  /// children's entry distances, compressed from registers (not reloaded from memory).
+  static void second_and_distances(const ChildHits<Arch>& hits, V entry, std::uint32_t& second, float& d0,
+                                   float& d1) {
+    static_assert(kHasMaskRegisters<Arch>);
+    const __m128 d = _mm256_castps256_ps128(_mm256_maskz_compress_ps(hits.k, entry));
+    second = static_cast<std::uint32_t>(
+        _mm_extract_epi32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(hits.k, hits.refs)), 1));
+    d0 = _mm_cvtss_f32(d);
+    d1 = _mm_cvtss_f32(_mm_movehdup_ps(d));
+  }
 };
 
 template <class Arch>
@@ -68,6 +114,11 @@ struct Lanes8<Arch, false> {
   static void store(float* p, V x) {
     _mm_store_ps(p, x.a);
     _mm_store_ps(p + 4, x.b);
+  }
+  static ChildHits<Arch> entered(V entry, V exit, const std::uint32_t* child) {
+    ChildHits<Arch> hits{le(entry, exit), 0};
+    if (hits.bits) hits.first_ref = child[std::countr_zero(hits.bits)];
+    return hits;
   }
 };
 

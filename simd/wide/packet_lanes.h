@@ -113,6 +113,39 @@ struct PacketLanes {
     exit = xsimd::min(tfz, xsimd::min(tfy, xsimd::min(tfx, far_pad)));
   }
 
+  /// The lanes whose own test (slabs(), or fused_slabs() with `f` where UseFused) enters
+  /// child j of `node`, as lane bits.
+  template <bool UseFused>
+  [[gnu::always_inline]] std::uint32_t lanes_entering(const Fused& f, const WideNode<kWideN>& node, int j,
+                                                      const int np[3], B pad) const {
+    std::uint32_t bits = 0;
+    for (int c = 0; c < C; ++c) {
+      B e, x;
+      if constexpr (UseFused)
+        fused_slabs(f, node, j, np, c, tfar[c] * pad, e, x);
+      else
+        slabs(node, j, np, c, pad, e, x);
+      bits |= bits_from_mask<Arch>(e <= x) << (c * L);
+    }
+    return bits;
+  }
+
+  /// Lanes `bits` handed to the single-ray walk, where few lanes are left in a subtree:
+  /// single(i, far) walks lane i with its far end `far`, which its hits lower, and says
+  /// whether the lane is finished. Returns the lanes finished.
+  template <class Single>
+  [[gnu::always_inline]] std::uint32_t hand_off(std::uint32_t bits, Single&& single) {
+    alignas(64) float far_lanes[K];
+    for (int c = 0; c < C; ++c) tfar[c].store_aligned(far_lanes + c * L);
+    std::uint32_t finished = 0;
+    for (std::uint32_t b = bits; b != 0; b &= b - 1) {
+      const int i = std::countr_zero(b);
+      if (single(i, far_lanes[i])) finished |= 1u << i;
+    }
+    for (int c = 0; c < C; ++c) tfar[c] = B::load_aligned(far_lanes + c * L);
+    return finished;
+  }
+
   /// The children that each lane of `bits` enters, as one lane bit per child lane: the
   /// test of slabs() turned around, one lane against all eight children (the same
   /// operations on the same values, so the same answer bit for bit). Cheaper than a test

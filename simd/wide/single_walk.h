@@ -1,7 +1,8 @@
 // The single-ray walk of the wide BVH: the entry prepares the ray itself (screen,
 // reciprocal, the watertight shear), then an explicit stack, children sorted by entry
 // distance when the query asks for it, leaves handed to the query (queries.h), whose
-// block kernels are inlined into the walk.
+// block kernels are inlined into the walk. Its steps: the node test (single_slabs.h), the
+// child order (child_order.h) and the pop (stack.h).
 #pragma once
 #include <immintrin.h>
 
@@ -10,9 +11,9 @@
 #include <cstdint>
 #include <cstring>
 
-#include "simd/wide/node_lanes.h"
+#include "simd/wide/child_order.h"
 #include "simd/wide/queries.h"
-#include "simd/wide/stack.h"
+#include "simd/wide/single_slabs.h"
 
 namespace volley::simd {
 
@@ -68,60 +69,15 @@ template <class Query, bool NoZero, class Leaves>
 void WideKernels<Arch, Test, Robust, PK>::walk(const WideView<Leaves>& bvh, const PreparedRay& pr, __m128 inv,
                                            std::uint32_t start, Query& query) {
   static_assert(detail::RayQuery<Query, Leaves>, "the single-ray walk takes a RayQuery (query_protocol.h)");
-  using V8 = detail::Lanes8<Arch>;
   static_assert(N == 8, "the single-ray node test reads eight children");
-  const Ray& ray = pr.ray;
-  // The octant by the sign bit of the reciprocal; near plane of axis a is bounds[2a + neg],
-  // far the other.
-  const int negative = _mm_movemask_ps(inv);
-  // The planes as byte offsets into a node's boxes: an address is then the node plus an
-  // offset, with no index to widen and scale at every node.
-  std::size_t near_plane[3];
-  for (int a = 0; a < 3; ++a) near_plane[a] = (2 * a + ((negative >> a) & 1)) * sizeof(WideNode<N>::bounds[0]);
-  constexpr std::size_t kFarPlane = sizeof(WideNode<N>::bounds[0]);  // a far plane's offset from its near one
-  const std::size_t nx = near_plane[0], ny = near_plane[1], nz = near_plane[2];
-  const std::size_t fx = nx ^ kFarPlane, fy = ny ^ kFarPlane, fz = nz ^ kFarPlane;
-  const auto plane = [](const WideNode<N>& node, std::size_t offset) {
-    return reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(node.bounds) + offset);
-  };
-  const auto ox = V8::set1(ray.org[0]), oy = V8::set1(ray.org[1]), oz = V8::set1(ray.org[2]);
-  const auto ix = V8::template lane<0>(inv), iy = V8::template lane<1>(inv), iz = V8::template lane<2>(inv);
-  const auto tmin = V8::set1(ray.tmin);
-  const float pad1 = Robust ? core::kSlabExitPad : 1.0f;
-  // Far distances use the reciprocal times the exit padding, rounded once per ray:
-  // fl(d * fl(inv * pad)) carries the same (1 + eps)^2 bound around d * inv * pad as the
-  // oracle's fl(fl(d * inv) * pad), so the 2 gamma(3) margin still covers the rounding of
-  // both ends (the padding was sized for the sub, reciprocal and product roundings), and
-  // the node test loses a multiply from its longest dependency chain. ±inf stays ±inf.
-  const __m128 finv = _mm_mul_ps(inv, _mm_set1_ps(pad1));
-  const auto fix = V8::template lane<0>(finv), fiy = V8::template lane<1>(finv), fiz = V8::template lane<2>(finv);
-  // With FMA and no zero direction component, a slab distance is one fused operation,
-  // b inv - c, where c is org inv rounded outwards (up for near planes, down for far ones)
-  // once per ray. Against (b - org) inv that moves near distances down and far ones up by a
-  // few ulps of org inv, and rounds once instead of twice, so the padding that covers the
-  // two-rounding form covers it (never culls a box the exact ray meets). NaN (inf - inf,
-  // only for a subnormal direction component, whose reciprocal overflows) is dropped by
-  // max/min as in the other form.
-  constexpr bool kFused = NoZero && V8::kFma;
-  typename V8::V cnx{}, cny{}, cnz{}, cfx{}, cfy{}, cfz{};
-  if constexpr (kFused) {
-    // c = p +- (|p| 2^-22 + 2^-149) with p = fl(org inv): p is within 2^-24 |org inv| of the
-    // exact product (2^-150 if subnormal), so the widened c lies beyond it even after its
-    // own rounding. Three lanes at once; an infinite p gives +inf or NaN, both harmless.
-    const __m128 org = _mm_loadu_ps(ray.org), sign = _mm_set1_ps(-0.0f);
-    // (Robust = false: c = p, no widening, as it has no padding.)
-    const __m128 rel = _mm_set1_ps(Robust ? 0x1p-22f : 0.0f), tiny = _mm_set1_ps(Robust ? 0x1p-149f : 0.0f);
-    const __m128 pn = _mm_mul_ps(org, inv);
-    const __m128 pf = _mm_mul_ps(org, finv);
-    const __m128 cn = _mm_add_ps(pn, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pn), rel), tiny));
-    const __m128 cf = _mm_sub_ps(pf, _mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, pf), rel), tiny));
-    cnx = V8::template lane<0>(cn), cny = V8::template lane<1>(cn), cnz = V8::template lane<2>(cn);
-    cfx = V8::template lane<0>(cf), cfy = V8::template lane<1>(cf), cfz = V8::template lane<2>(cf);
-  }
-
+  using Slabs = detail::SingleRaySlabs<Arch, Robust, NoZero>;
+  using V8 = typename Slabs::V8;
+  // (Not const, nor `hits` below: GCC's scalar replacement skips a const aggregate that its
+  // constructor writes.)
+  Slabs slabs(pr.ray, inv);
   // The upper end of the search (closest hit, as RayBlockKernels: the nearer of hit.t and tmax).
-  float tmax = query.bound(ray);
-  auto tmax8 = V8::set1(tmax * pad1);
+  float tmax = query.bound(pr.ray);
+  auto tmax8 = V8::set1(tmax * Slabs::kPad);
   detail::WideStackItem<Arch> stack[detail::kWideStack];
   int size = 0;
   std::uint32_t ref = start;
@@ -129,163 +85,38 @@ void WideKernels<Arch, Test, Robust, PK>::walk(const WideView<Leaves>& bvh, cons
   const Leaves* const all_blocks = bvh.blocks;
   for (;;) {
     if (!(ref & wide_ref::kLeafBit)) {
-      // Interior: slab test of all eight children at once.
       query.node();
       const WideNode<N>& node = wide_ref::node_at(nodes, ref);
       // The child references sit on the node's fourth cache line, read only after the slab
       // test: request it now, beside the three lines of boxes.
-      _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);
-      typename V8::V tnx, tny, tnz, tfx, tfy, tfz;
-      if constexpr (kFused) {
-        tnx = V8::fmsub(V8::load(plane(node, nx)), ix, cnx);
-        tny = V8::fmsub(V8::load(plane(node, ny)), iy, cny);
-        tnz = V8::fmsub(V8::load(plane(node, nz)), iz, cnz);
-        tfx = V8::fmsub(V8::load(plane(node, fx)), fix, cfx);
-        tfy = V8::fmsub(V8::load(plane(node, fy)), fiy, cfy);
-        tfz = V8::fmsub(V8::load(plane(node, fz)), fiz, cfz);
-      } else {
-        tnx = V8::mul(V8::sub(V8::load(plane(node, nx)), ox), ix);
-        tny = V8::mul(V8::sub(V8::load(plane(node, ny)), oy), iy);
-        tnz = V8::mul(V8::sub(V8::load(plane(node, nz)), oz), iz);
-        tfx = V8::mul(V8::sub(V8::load(plane(node, fx)), ox), fix);
-        tfy = V8::mul(V8::sub(V8::load(plane(node, fy)), oy), fiy);
-        tfz = V8::mul(V8::sub(V8::load(plane(node, fz)), oz), fiz);
-      }
-      typename V8::V entry, exit;
-      if constexpr (NoZero) {
-        // Combined as a tree. No direction component is ±0, but a subnormal one has an
-        // infinite reciprocal, so a distance can still be NaN (origin on the plane). The tree
-        // stays NaN-free: tmin / tmax8 are never NaN, so the right halves are not; a NaN left
-        // half then yields the right one. A NaN drops its partner distance too, which only
-        // lowers entry or raises exit: more boxes visited, never fewer (tests/accel:
-        // subnormal directions).
-        entry = V8::max(V8::max(tnx, tny), V8::max(tnz, tmin));
-        exit = V8::min(V8::min(tfx, tfy), V8::min(tfz, tmax8));
-      } else {
-        entry = V8::max(tnz, V8::max(tny, V8::max(tnx, tmin)));
-        exit = V8::min(tfz, V8::min(tfy, V8::min(tfx, tmax8)));
-      }
-      // The hit children as bits, and the first one's reference. AVX-512 compares into a
-      // mask register and takes the reference out of the node's reference vector with one
-      // vpcompressd, so the next node's address does not wait for movemask, bit scan and a
-      // load indexed by it, the longest chain of the walk (perf/traversal.md).
-      std::uint32_t bits;
-      std::uint32_t first_ref = 0;
-      [[maybe_unused]] __mmask8 k = 0;  // AVX-512: the hit mask and the node's references
-      [[maybe_unused]] __m256i refs;
-      if constexpr (detail::kHasMaskRegisters<Arch>) {
-        k = _mm256_cmp_ps_mask(entry, exit, _CMP_LE_OQ);
-        bits = k;
-        refs = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
-        first_ref =
-            static_cast<std::uint32_t>(_mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
-      } else {
-        bits = V8::le(entry, exit);
-        if (bits) first_ref = node.child[std::countr_zero(bits)];
-      }
+      __builtin_prefetch(node.child);
+      typename V8::V entry;
+      detail::ChildHits<Arch> hits = slabs.test(node, tmax8, entry);
       if constexpr (Query::kNearFirst)
-        for (std::uint32_t b = bits; b != 0; b &= b - 1)
+        for (std::uint32_t b = hits.bits; b != 0; b &= b - 1)
           if (const std::uint32_t child = node.child[std::countr_zero(b)]; child & wide_ref::kLeafBit)
             wide_ref::request_leaf(all_blocks, child);
-      if (!Query::kNearFirst && bits != 0) {
-        // Any order: no ordering and no distances (the stack entries are never pruned): the
-        // first hit child next, the others on the stack.
-        ref = first_ref;
-        for (bits &= bits - 1; bits != 0; bits &= bits - 1) stack[size++].ref = node.child[std::countr_zero(bits)];
+      if (hits.bits != 0 && (!Query::kNearFirst || (hits.bits & (hits.bits - 1)) == 0)) {
+        // One child entered (the most frequent case), or any order: no distances.
+        ref = detail::push_in_slot_order(node, hits, stack, size);
         continue;
       }
-      if (bits != 0) {
-        const int i = std::countr_zero(bits);
-        bits &= bits - 1;
-        if (bits == 0) {
-          ref = first_ref;
-          continue;
-        }
-        alignas(32) float dist[8];
-        V8::store(dist, entry);
-        const int j = std::countr_zero(bits);
-        bits &= bits - 1;
-        if (bits == 0) {
-          // Two children: the nearer next, the other on the stack (selects, not a branch:
-          // which one is nearer is a coin toss to the predictor).
-          std::uint32_t ci, cj;
-          float di, dj;
-          if constexpr (detail::kHasMaskRegisters<Arch>) {
-            // Both distances and the second reference compressed from registers too, not
-            // reloaded from the stored distances.
-            const __m128 d = _mm256_castps256_ps128(_mm256_maskz_compress_ps(k, entry));
-            ci = first_ref;
-            cj = static_cast<std::uint32_t>(
-                _mm_extract_epi32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs)), 1));
-            di = _mm_cvtss_f32(d);
-            dj = _mm_cvtss_f32(_mm_movehdup_ps(d));
-          } else {
-            ci = node.child[i], cj = node.child[j];
-            di = dist[i], dj = dist[j];
-          }
-          const bool swap = dj < di;
-          stack[size++] = {swap ? ci : cj, swap ? di : dj};
-          ref = swap ? cj : ci;
-          continue;
-        }
-        if (std::popcount(bits) <= 2) {
-          // Three or four (most nodes with three or more hit children): sorted in registers
-          // by a stable network of compare-exchanges, the nearest reference never stored and
-          // reloaded as in the insertion sort below. GCC compiles each exchange to a short
-          // branch; branch-free, the nearest would wait for every exchange (the variants
-          // measured: perf/traversal.md).
-          std::uint64_t w[4] = {detail::stack_word(node.child[i], dist[i]), detail::stack_word(node.child[j], dist[j]),
-                                0, 0};
-          const int k = std::countr_zero(bits);
-          w[2] = detail::stack_word(node.child[k], dist[k]);
-          bits &= bits - 1;
-          int n = 3;
-          if (bits == 0) {
-            detail::sort_far_first<3>(w);
-          } else {
-            const int l = std::countr_zero(bits);
-            w[3] = detail::stack_word(node.child[l], dist[l]);
-            detail::sort_far_first<4>(w);
-            n = 4;
-          }
-          std::memcpy(&stack[size], w, 8 * static_cast<std::size_t>(n - 1));
-          size += n - 1;
-          ref = static_cast<std::uint32_t>(w[n - 1]);
-          continue;
-        }
-        // Five or more: push all, sort the pushed run far to near (insertion sort of at
-        // most eight), and continue with the nearest (the top).
-        const int base = size;
-        stack[size++] = {node.child[i], dist[i]};
-        stack[size++] = {node.child[j], dist[j]};
-        for (; bits != 0; bits &= bits - 1) {
-          const int k = std::countr_zero(bits);
-          stack[size++] = {node.child[k], dist[k]};
-        }
-        for (int a = base + 1; a < size; ++a) {
-          const detail::WideStackItem<Arch> item = stack[a];
-          int b = a;
-          for (; b > base && stack[b - 1].entry < item.entry; --b) stack[b] = stack[b - 1];
-          stack[b] = item;
-        }
-        ref = stack[--size].ref;
+      if (hits.bits != 0) {
+        ref = detail::push_near_first(node, hits, entry, stack, size);
         continue;
       }
-    } else {
+    } else if (const std::uint32_t count = wide_ref::leaf_count(ref); count != 0) {
       // Leaf: its blocks to the query, which may lower tmax or end the walk.
-      const std::uint32_t count = wide_ref::leaf_count(ref);
-      if (count != 0) {
-        const detail::LeafStep step = query.leaf(pr, all_blocks + wide_ref::leaf_first(ref), count, tmax);
-        if (step == detail::LeafStep::done) return;
-        if (step == detail::LeafStep::narrowed) tmax8 = V8::set1(tmax * pad1);
-      }
+      const detail::LeafStep step = query.leaf(pr, all_blocks + wide_ref::leaf_first(ref), count, tmax);
+      if (step == detail::LeafStep::done) return;
+      if (step == detail::LeafStep::narrowed) tmax8 = V8::set1(tmax * Slabs::kPad);
     }
     // Pop the next subtree that may still hold a hit nearer than tmax (padded as the
     // exit distance: its entry was computed with rounding).
     for (;;) {
       if (size == 0) return;
       --size;
-      if (!Query::kNearFirst || stack[size].entry <= tmax * pad1) break;
+      if (!Query::kNearFirst || stack[size].entry <= tmax * Slabs::kPad) break;
     }
     ref = stack[size].ref;
   }

@@ -89,6 +89,30 @@ template <int Count>
   }
 }
 
+/// Pushes `item` into the run stack[base .. size), which is kept sorted far to near (the
+/// nearest on top, popped first).
+template <class Item>
+[[gnu::always_inline]] inline void insert_far_to_near(Item* stack, int& size, int base, const Item& item) {
+  int k = size++;
+  for (; k > base && stack[k - 1].entry < item.entry; --k) stack[k] = stack[k - 1];
+  stack[k] = item;
+}
+
+/// Pops the next entry into `top`; where Prune, skips those whose entry distance is past
+/// `bound` (a hit nearer than their boxes has ruled them out; `bound` is the upper end padded
+/// as the exit distances, since the entries were computed with rounding). False when the
+/// stack is empty.
+template <bool Prune, class Item>
+[[gnu::always_inline]] inline bool pop_within(const Item* stack, int& size, float bound, Item& top) {
+  for (;;) {
+    if (size == 0) return false;
+    --size;
+    if (!Prune || stack[size].entry <= bound) break;
+  }
+  top = stack[size];
+  return true;
+}
+
 /// Entries a traversal stack needs: every wide level pushes at most N - 1 entries more
 /// than it pops, and a wide BVH is no deeper than its binary BVH (< kBvhMaxDepth).
 inline constexpr int kWideStack = (kWideN - 1) * core::kBvhMaxDepth + 1;

@@ -45,8 +45,7 @@ std::vector<CaseKey> case_keys(const std::vector<Row>& rows, const std::string& 
 
 const Row* find_row(const std::vector<Row>& rows, const Config& c, const CaseKey& k) {
   for (const Row& r : rows)
-    if (r.set == k.set && r.name == k.name && r.offset == k.offset && r.config == c)
-      return &r;
+    if (r.set == k.set && r.name == k.name && r.offset == k.offset && r.config == c) return &r;
   return nullptr;
 }
 
@@ -95,23 +94,8 @@ void targets_section(std::ostream& out, const std::vector<ConfigSummary>& config
          "[long.md](long.md) (`volley accuracy --long`).\n\n";
 }
 
-}  // namespace
-
-void write_markdown(const Report& report, const std::filesystem::path& file) {
-  const std::vector<ConfigSummary> configs = summarize(report.rows);
+void summary_section(std::ostream& out, const std::vector<ConfigSummary>& configs) {
   const std::vector<std::size_t> front = pareto_front(configs);
-  std::ostringstream out;
-  out << "# Accuracy report: run time against error\n\n";
-  out << "Written by `" << report.command << "` on " << utc_now() << ", " << cpu_model() << ", in "
-      << num(report.seconds, "%.0f") << " s. Each configuration is a triangle test × ISA × query mode × BVH "
-      << "traversal (robust = padded, NaN-safe slab test; plain = the unpadded one). Speed: CPU time of one thread, "
-      << "closest hit only, best of the timed passes (robust and plain alternating), over " << speed_basis(report.rows)
-      << ". Plot: [accuracy.png](accuracy.png); "
-      << "every number: [accuracy.csv](accuracy.csv).\n\n";
-  for (const std::string& n : report.notes) out << "- " << n << "\n";
-  if (!report.notes.empty()) out << "\n";
-  targets_section(out, configs);
-
   out << "## Summary per configuration\n\n"
       << "Leaks: rays from inside a closed mesh aimed exactly at a shared vertex, edge midpoint or quad diagonal "
       << "that `intersect` or `occluded` lets through (all offsets). t error: relative, against the double-precision "
@@ -129,7 +113,9 @@ void write_markdown(const Report& report, const std::filesystem::path& file) {
         << " |\n";
   }
   out << "\n";
+}
 
+void robust_section(std::ostream& out, const std::vector<ConfigSummary>& configs) {
   out << "## Robust traversal: its cost and what it buys\n\n"
       << "ns/ray of the plain and the robust slab test, same test, ISA and mode; leaks over all closed cases.\n\n"
       << "| test | ISA | mode | plain ns/ray | robust ns/ray | cost | plain leaks | robust leaks |\n"
@@ -146,7 +132,81 @@ void write_markdown(const Report& report, const std::filesystem::path& file) {
       }
   }
   out << "\n";
+}
 
+void images_section(std::ostream& out, const std::vector<ImageRow>& images) {
+  if (images.empty()) return;
+  out << "## Image error\n\n"
+      << "Each scene rendered at 1 spp on one thread with every test × ISA (robust traversal) and compared with the "
+      << "reference render (scalar, watertight, double precision). RMSE over the sRGB-encoded channels in [0, 1] "
+      << "(what the PNG shows); PSNR = 20 log10(1 / RMSE).\n\n"
+      << "| scene | size | test | ISA | render s (wall) | RMSE | PSNR dB | NaN pixels "
+         "|\n|---|---|---|---|---:|---:|---:|---:|\n";
+  for (const ImageRow& r : images)
+    out << "| " << r.scene << " | " << r.width << "×" << r.height << " | "
+        << (r.reference ? "reference" : std::string(to_string(r.test))) << " | " << to_string(r.isa) << " | "
+        << num(r.seconds, "%.3f") << " | " << num(r.rmse) << " | " << num(r.psnr, "%.1f") << " | " << r.nan_pixels
+        << " |\n";
+  out << "\n";
+}
+
+void queries_section(std::ostream& out, const std::vector<QueryRow>& queries) {
+  if (queries.empty()) return;
+  out << "## Queries beyond the first hit\n\n"
+         "Crossing parity: rays from inside closed meshes (cube, icospheres) aimed exactly at vertices, edge "
+         "midpoints and diagonals, and in random directions, at offsets 0, 1e3, 1e5 and 1e6, unbounded: an even "
+         "count_intersections is a wrong parity. Box: axis-aligned rays from inside a box mesh through its grid's "
+         "vertices and edges "
+         "(one crossing each). contains: points farther than 1e-6 of the size from the surface against the box "
+         "and a double winding number. Distance error: max |d - d_ref| / (eps (d_ref + size)) against a double "
+         "brute force, eps = 2^-24. One thread (docs/crossings.md).\n\n"
+         "| ISA | wrong parities / rays | box rays wrong / rays | contains wrong / points | distance error (eps) | "
+         "ns per count | ns per distance |\n|---|---|---|---|---|---|---|\n";
+  for (const QueryRow& q : queries)
+    out << "| " << to_string(q.isa) << " | " << q.parity_errors << " / " << q.parity_rays << " | " << q.box_errors
+        << " / " << q.box_rays << " | " << q.contains_errors << " / " << q.contains_points << " | "
+        << num(q.distance_error_max, "%.2f") << " | " << num(q.count_ns, "%.0f") << " | " << num(q.distance_ns, "%.0f")
+        << " |\n";
+  out << "\n";
+}
+
+void definitions_section(std::ostream& out, const Tolerances& t) {
+  out << "## Definitions and tolerances\n\n"
+      << "- Reference: the scalar oracle with `Options::reference_double` (watertight test in double precision, "
+         "robust traversal) gives the reference closest hit of every ray; a Möller–Trumbore test in double on the "
+         "float vertices gives t and barycentrics of any (ray, triangle).\n"
+      << "- t error: |t − t_ref| / |t_ref| with t_ref in double on the triangle the configuration reported; hits with "
+         "|t_ref| < "
+      << num(t.t_floor) << " left out.\n"
+      << "- False hit: the reported triangle's double barycentrics are below −" << num(t.margin)
+      << " (the ray passes outside it by more than the margin).\n"
+      << "- False miss: the reference hit is clear (all barycentrics >= " << num(t.margin) << ", |t_ref| > "
+      << num(t.t_floor)
+      << ": an origin on a triangle is stress item 12, not a miss) and the configuration misses it, reports a hit "
+         "farther by more than "
+      << num(t.t_relative) << " relative, or `occluded` says no.\n"
+      << "- Leak: a ray from inside a closed mesh that `intersect` misses or `occluded` lets through.\n"
+      << "- NaN: a hit with a NaN t, u or v.\n\n";
+}
+
+}  // namespace
+
+void write_markdown(const Report& report, const std::filesystem::path& file) {
+  const std::vector<ConfigSummary> configs = summarize(report.rows);
+  std::ostringstream out;
+  out << "# Accuracy report: run time against error\n\n";
+  out << "Written by `" << report.command << "` on " << utc_now() << ", " << cpu_model() << ", in "
+      << num(report.seconds, "%.0f") << " s. Each configuration is a triangle test × ISA × query mode × BVH "
+      << "traversal (robust = padded, NaN-safe slab test; plain = the unpadded one). Speed: CPU time of one thread, "
+      << "closest hit only, best of the timed passes (robust and plain alternating), over " << speed_basis(report.rows)
+      << ". Plot: [accuracy.png](accuracy.png); "
+      << "every number: [accuracy.csv](accuracy.csv).\n\n";
+  for (const std::string& n : report.notes) out << "- " << n << "\n";
+  if (!report.notes.empty()) out << "\n";
+  targets_section(out, configs);
+
+  summary_section(out, configs);
+  robust_section(out, configs);
   out << "## Leaks by closed mesh and offset\n\n"
       << "Leaked rays (intersect or occluded) of the rays in each case (rays: "
       << "cube8 = 12 origins × 1734 targets, icosphere3 = 8 origins × 2562 targets, fewer when an origin rounds onto "
@@ -168,61 +228,14 @@ void write_markdown(const Report& report, const std::filesystem::path& file) {
     });
   }
 
-  if (!report.images.empty()) {
-    out << "## Image error\n\n"
-        << "Each scene rendered at 1 spp on one thread with every test × ISA (robust traversal) and compared with the "
-        << "reference render (scalar, watertight, double precision). RMSE over the sRGB-encoded channels in [0, 1] "
-        << "(what the PNG shows); PSNR = 20 log10(1 / RMSE).\n\n"
-        << "| scene | size | test | ISA | render s (wall) | RMSE | PSNR dB | NaN pixels "
-           "|\n|---|---|---|---|---:|---:|---:|---:|\n";
-    for (const ImageRow& r : report.images)
-      out << "| " << r.scene << " | " << r.width << "×" << r.height << " | "
-          << (r.reference ? "reference" : std::string(to_string(r.test))) << " | " << to_string(r.isa) << " | "
-          << num(r.seconds, "%.3f") << " | " << num(r.rmse) << " | " << num(r.psnr, "%.1f") << " | " << r.nan_pixels
-          << " |\n";
-    out << "\n";
-  }
-
-  const Tolerances& t = report.tolerances;
-  if (!report.queries.empty()) {
-    out << "## Queries beyond the first hit\n\n"
-           "Crossing parity: rays from inside closed meshes (cube, icospheres) aimed exactly at vertices, edge "
-           "midpoints and diagonals, and in random directions, at offsets 0, 1e3, 1e5 and 1e6, unbounded: an even "
-           "count_intersections is a wrong parity. Box: axis-aligned rays from inside a box mesh through its grid's vertices and edges "
-           "(one crossing each). contains: points farther than 1e-6 of the size from the surface against the box "
-           "and a double winding number. Distance error: max |d - d_ref| / (eps (d_ref + size)) against a double "
-           "brute force, eps = 2^-24. One thread (docs/crossings.md).\n\n"
-           "| ISA | wrong parities / rays | box rays wrong / rays | contains wrong / points | distance error (eps) | "
-           "ns per count | ns per distance |\n|---|---|---|---|---|---|---|\n";
-    for (const QueryRow& q : report.queries)
-      out << "| " << to_string(q.isa) << " | " << q.parity_errors << " / " << q.parity_rays << " | " << q.box_errors
-          << " / " << q.box_rays << " | " << q.contains_errors << " / " << q.contains_points << " | "
-          << num(q.distance_error_max, "%.2f") << " | " << num(q.count_ns, "%.0f") << " | "
-          << num(q.distance_ns, "%.0f") << " |\n";
-    out << "\n";
-  }
-  out << "## Definitions and tolerances\n\n"
-      << "- Reference: the scalar oracle with `Options::reference_double` (watertight test in double precision, "
-         "robust traversal) gives the reference closest hit of every ray; a Möller–Trumbore test in double on the "
-         "float vertices gives t and barycentrics of any (ray, triangle).\n"
-      << "- t error: |t − t_ref| / |t_ref| with t_ref in double on the triangle the configuration reported; hits with "
-         "|t_ref| < "
-      << num(t.t_floor) << " left out.\n"
-      << "- False hit: the reported triangle's double barycentrics are below −" << num(t.margin)
-      << " (the ray passes outside it by more than the margin).\n"
-      << "- False miss: the reference hit is clear (all barycentrics >= " << num(t.margin) << ", |t_ref| > "
-      << num(t.t_floor)
-      << ": an origin on a triangle is stress item 12, not a miss) and the configuration misses it, reports a hit "
-         "farther by more than "
-      << num(t.t_relative) << " relative, or `occluded` says no.\n"
-      << "- Leak: a ray from inside a closed mesh that `intersect` misses or `occluded` lets through.\n"
-      << "- NaN: a hit with a NaN t, u or v.\n\n";
+  images_section(out, report.images);
+  queries_section(out, report.queries);
+  definitions_section(out, report.tolerances);
   out << "## Reproduce\n\n```sh\n"
       << "cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release && cmake --build build/release --target volley_cli\n"
       << "build/release/volley accuracy                 # this report (perf/accuracy/)\n"
       << "build/release/volley accuracy --long          # long.md: >= 10 million aimed rays per ISA\n"
       << "build/release/volley accuracy --help\n```\n";
-
   std::ofstream f(file);
   if (!(f << out.str())) throw std::runtime_error(file.string() + ": cannot write the report");
 }

@@ -83,7 +83,8 @@ std::vector<Isa> chosen_isas(const AccuracyArgs& a) {
 /// directory when it holds scenes/, else two levels above the executable (build/<dir>/volley).
 fs::path project_root() {
   if (fs::exists(fs::path("scenes") / "cornell.json")) return fs::current_path();
-  if (const auto root = project_dir_of_executable(); root && fs::exists(*root / "scenes" / "cornell.json")) return *root;
+  if (const auto root = project_dir_of_executable(); root && fs::exists(*root / "scenes" / "cornell.json"))
+    return *root;
   return fs::current_path();
 }
 
@@ -163,24 +164,89 @@ int run_long(const AccuracyArgs& a, const std::vector<Isa>& isas, const std::vec
   return 0;
 }
 
-}  // namespace
+/// The configurations to measure, from the options.
+acc::Plan make_plan(const AccuracyArgs& a) {
+  acc::Plan plan;
+  for (const std::string& t : a.tests) plan.tests.push_back(*parse_triangle_test(t));
+  plan.isas = chosen_isas(a);
+  for (const std::string& m : a.modes) {
+    acc::Mode mode{};
+    acc::parse_mode(m, mode);  // CLI11 checked the name
+    plan.modes.push_back(mode);
+  }
+  plan.reps = a.reps;
 
-Runner register_accuracy(CLI::App& app) {
-  auto args = std::make_shared<AccuracyArgs>();
-  CLI::App* cmd =
-      app.add_subcommand("accuracy",
-                         "Measure run time against error for every triangle test x ISA x query mode x traversal;\n"
-                         "write report.md, accuracy.csv and accuracy.png (gnuplot) to the output folder.\n"
-                         "Cases: closed meshes (grid cube, icosphere) with rays from inside aimed exactly at shared\n"
-                         "vertices, edge midpoints and diagonals (leaks), 500 random triangles (t error), both moved\n"
-                         "to 0, 1e3, 1e5, 1e6; the shared meshes stanford-bunny.obj and dragon_100k.obj (primary and\n"
-                         "random rays); image error of scenes/cornell.json and bench/scenes/bunny.json against a\n"
-                         "double-precision reference render. About 3-5 minutes on 2 cores.\n"
-                         "Examples:\n"
-                         "  volley accuracy                                   # perf/accuracy/\n"
-                         "  volley accuracy --test watertight --isa avx2 -o out/acc\n"
-                         "  volley accuracy --long                            # perf/accuracy/long.md");
-  cmd->add_option("--scenes", args->scenes, "Folder of the benchmark meshes (scenes/fetch gets them): default $VOLLEY_SCENES, else ../shared/scenes, else scenes/downloads");
+  return plan;
+}
+
+/// The report's measurements: every case, the image error and the queries' checks.
+acc::Report measure(const AccuracyArgs& a, const acc::Plan& plan, std::size_t& case_count) {
+  const auto start = std::chrono::steady_clock::now();
+  acc::Report report;
+  report.command = command_line(a);
+  report.tolerances = plan.tolerances;
+  for (Isa isa : acc::missing_isas())
+    report.notes.push_back("This CPU lacks " + std::string(to_string(isa)) + ": not measured.");
+
+  const fs::path scenes = shared_scenes_dir(a.scenes);
+  const std::vector<acc::Case> cases = gather_cases(a, scenes, report);
+  case_count = cases.size();
+  ProgressBar bar("accuracy");
+  const double image_share = a.no_images ? 0.0 : 0.2;
+  report.rows = acc::run(cases, plan, [&](double f) { bar.update(f * (1.0 - image_share)); });
+
+  if (!a.no_images)
+    add_image_rows(a, plan, scenes, report, [&](double f) { bar.update(1.0 - image_share + image_share * f); });
+  report.queries = acc::run_query_checks(plan.isas);
+  bar.finish();
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  return report;
+}
+
+/// Writes report.md, accuracy.csv and accuracy.png and prints the summary line.
+int write_report(const AccuracyArgs& a, const acc::Report& report, std::size_t case_count) {
+  const fs::path out(a.output);
+  acc::write_markdown(report, out / "report.md");
+  acc::write_csv(report, out / "accuracy.csv");
+  std::string plot_message;
+  const bool plotted = acc::write_plot(report, out / "accuracy.png", plot_message);
+  if (!plotted) std::fprintf(stderr, "volley accuracy: %s\n", plot_message.c_str());
+
+  std::size_t rays = 0, wt_leaks = 0, nan = 0;
+  double worst_median = 0;
+  const std::vector<acc::ConfigSummary> summaries = acc::summarize(report.rows);
+  for (const acc::ConfigSummary& s : summaries) {
+    rays += s.rays, nan += s.nan;
+    if (s.config.test == TriangleTest::watertight && s.config.robust) wt_leaks += s.leaks;
+    worst_median = std::max(worst_median, s.worst_t_median);
+  }
+  std::size_t parity = 0, contains = 0;
+  for (const acc::QueryRow& q : report.queries) parity += q.parity_errors + q.box_errors, contains += q.contains_errors;
+  std::printf(
+      "accuracy: %zu configurations x %zu cases, %zu rays, watertight+robust leaks %zu, worst t error "
+      "median %.3g, NaN %zu, %zu renders, crossing parity errors %zu, contains errors %zu, in %.0f s -> "
+      "%s/{report.md,accuracy.csv%s}\n",
+      summaries.size(), case_count, rays, wt_leaks, worst_median, nan, report.images.size(), parity, contains,
+      report.seconds, out.string().c_str(), plotted ? ",accuracy.png" : "");
+  return 0;
+}
+
+/// volley accuracy's run.
+int run_accuracy(const AccuracyArgs& a) {
+  const acc::Plan plan = make_plan(a);
+  fs::create_directories(a.output);  // fail before the measurements, not after
+  if (a.long_mode) return run_long(a, plan.isas, plan.modes);
+  std::size_t case_count = 0;
+  const acc::Report report = measure(a, plan, case_count);
+  return write_report(a, report, case_count);
+}
+
+/// The command's options.
+void add_accuracy_options(CLI::App* cmd, AccuracyArgs* args) {
+  cmd->add_option("--scenes", args->scenes,
+                  "Folder of the benchmark meshes (scenes/fetch gets them): default $VOLLEY_SCENES, else "
+                  "../shared/scenes, else scenes/downloads");
   cmd->add_option("-o,--output", args->output, "Output folder")->capture_default_str();
   cmd->add_option("--test", args->tests, "Triangle tests, comma-separated")
       ->delimiter(',')
@@ -204,65 +270,27 @@ Runner register_accuracy(CLI::App& app) {
   cmd->add_option("--long-rays", args->long_rays, "Distinct rays per ISA for --long")
       ->check(CLI::Range(1e3, 1e9))
       ->capture_default_str();
+}
 
-  return [args]() {
-    const AccuracyArgs& a = *args;
-    const auto start = std::chrono::steady_clock::now();
-    acc::Plan plan;
-    for (const std::string& t : a.tests) plan.tests.push_back(*parse_triangle_test(t));
-    plan.isas = chosen_isas(a);
-    for (const std::string& m : a.modes) {
-      acc::Mode mode{};
-      acc::parse_mode(m, mode);  // CLI11 checked the name
-      plan.modes.push_back(mode);
-    }
-    plan.reps = a.reps;
-    fs::create_directories(a.output);  // fail before the measurements, not after
-    if (a.long_mode) return run_long(a, plan.isas, plan.modes);
+}  // namespace
 
-    acc::Report report;
-    report.command = command_line(a);
-    report.tolerances = plan.tolerances;
-    for (Isa isa : acc::missing_isas())
-      report.notes.push_back("This CPU lacks " + std::string(to_string(isa)) + ": not measured.");
-
-    const fs::path scenes = shared_scenes_dir(a.scenes);
-    const std::vector<acc::Case> cases = gather_cases(a, scenes, report);
-    ProgressBar bar("accuracy");
-    const double image_share = a.no_images ? 0.0 : 0.2;
-    report.rows = acc::run(cases, plan, [&](double f) { bar.update(f * (1.0 - image_share)); });
-
-    if (!a.no_images)
-      add_image_rows(a, plan, scenes, report, [&](double f) { bar.update(1.0 - image_share + image_share * f); });
-    report.queries = acc::run_query_checks(plan.isas);
-    bar.finish();
-    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-    const fs::path out(a.output);
-    acc::write_markdown(report, out / "report.md");
-    acc::write_csv(report, out / "accuracy.csv");
-    std::string plot_message;
-    const bool plotted = acc::write_plot(report, out / "accuracy.png", plot_message);
-    if (!plotted) std::fprintf(stderr, "volley accuracy: %s\n", plot_message.c_str());
-
-    std::size_t rays = 0, wt_leaks = 0, nan = 0;
-    double worst_median = 0;
-    const std::vector<acc::ConfigSummary> summaries = acc::summarize(report.rows);
-    for (const acc::ConfigSummary& s : summaries) {
-      rays += s.rays, nan += s.nan;
-      if (s.config.test == TriangleTest::watertight && s.config.robust) wt_leaks += s.leaks;
-      worst_median = std::max(worst_median, s.worst_t_median);
-    }
-    std::size_t parity = 0, contains = 0;
-    for (const acc::QueryRow& q : report.queries) parity += q.parity_errors + q.box_errors, contains += q.contains_errors;
-    std::printf(
-        "accuracy: %zu configurations x %zu cases, %zu rays, watertight+robust leaks %zu, worst t error "
-        "median %.3g, NaN %zu, %zu renders, crossing parity errors %zu, contains errors %zu, in %.0f s -> "
-        "%s/{report.md,accuracy.csv%s}\n",
-        summaries.size(), cases.size(), rays, wt_leaks, worst_median, nan, report.images.size(), parity, contains,
-        report.seconds, out.string().c_str(), plotted ? ",accuracy.png" : "");
-    return 0;
-  };
+Runner register_accuracy(CLI::App& app) {
+  auto args = std::make_shared<AccuracyArgs>();
+  CLI::App* cmd =
+      app.add_subcommand("accuracy",
+                         "Measure run time against error for every triangle test x ISA x query mode x traversal;\n"
+                         "write report.md, accuracy.csv and accuracy.png (gnuplot) to the output folder.\n"
+                         "Cases: closed meshes (grid cube, icosphere) with rays from inside aimed exactly at shared\n"
+                         "vertices, edge midpoints and diagonals (leaks), 500 random triangles (t error), both moved\n"
+                         "to 0, 1e3, 1e5, 1e6; the shared meshes stanford-bunny.obj and dragon_100k.obj (primary and\n"
+                         "random rays); image error of scenes/cornell.json and bench/scenes/bunny.json against a\n"
+                         "double-precision reference render. About 3-5 minutes on 2 cores.\n"
+                         "Examples:\n"
+                         "  volley accuracy                                   # perf/accuracy/\n"
+                         "  volley accuracy --test watertight --isa avx2 -o out/acc\n"
+                         "  volley accuracy --long                            # perf/accuracy/long.md");
+  add_accuracy_options(cmd, args.get());
+  return [args]() { return run_accuracy(*args); };
 }
 
 }  // namespace volley::cli

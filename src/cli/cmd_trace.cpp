@@ -14,6 +14,8 @@
 // reference=1 with --reference, mask the --mask the rays were traced with, normals=1 when
 // --normals computed each hit's normal inside the timing, exclude the --exclude hit file whose
 // primitives the rays passed over. Keys are only ever added.
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -26,18 +28,14 @@
 #include <thread>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "cli/trace_tracers.h"
 #include "io/query_files.h"
 #include "io/ray_file.h"
 #include "io/scene_loader.h"
 #include "render/scene.h"
 #include "volley/accel.h"
-#include "volley/packet.h"
 
 namespace volley::cli {
 namespace {
@@ -46,14 +44,14 @@ struct TraceArgs {
   std::string scene;
   std::string rays;
   std::string output;
-  std::string save;  ///< write the built structure here
-  std::string load;  ///< map the structure from here instead of building it
+  std::string save;                   ///< write the built structure here
+  std::string load;                   ///< map the structure from here instead of building it
   std::optional<std::uint32_t> mask;  ///< the rays' mask (the masked query forms)
-  std::string exclude;  ///< --exclude: a hit file, one per ray, whose primitives the rays pass over
+  std::string exclude;                ///< --exclude: a hit file, one per ray, whose primitives the rays pass over
   bool occluded = false;
-  bool count = false;  ///< --count: crossings per ray (.vcnt)
-  bool all = false;    ///< --all: every hit per ray (.vall)
-  bool stats = false;  ///< --stats: the single-ray walk's visits per ray
+  bool count = false;    ///< --count: crossings per ray (.vcnt)
+  bool all = false;      ///< --all: every hit per ray (.vall)
+  bool stats = false;    ///< --stats: the single-ray walk's visits per ray
   bool normals = false;  ///< --normals: each closest hit's geometric normal too, timed
   std::string mode = "single";
   int packet = 16;
@@ -62,178 +60,23 @@ struct TraceArgs {
   KernelArgs kernel;
 };
 
-/// Rays per unit of work handed to a thread: a multiple of every packet width, so a
-/// chunk never splits a packet (and a 4x4 block of primary rays stays in one packet).
-constexpr std::size_t kChunk = 1024;
-static_assert(kChunk % 16 == 0, "chunks hold whole packets");
-
-/// The answers of one pass: closest hits, one byte per ray for occlusion, crossings per
-/// ray (--count), or every hit per ray (--all).
-struct Answers {
-  std::vector<Hit> hits;
-  std::vector<std::uint8_t> blocked;
-  std::vector<std::uint32_t> counts;
-  std::vector<std::vector<Hit>> lists;
-  std::vector<float> normals;  ///< --normals: 3 per ray
-};
-
-/// The crossing queries, ray by ray (they have no packet forms): counts or hit lists.
-void trace_crossings(const Accel& accel, const Ray* r, const std::uint32_t* masks, std::size_t begin, std::size_t end,
-                     Answers& out) {
-  for (std::size_t i = begin; i < end; ++i) {
-    const std::uint32_t mask = masks ? masks[i] : kMaskAll;
-    if (out.lists.empty()) {
-      out.counts[i] = accel.count_intersections(r[i], mask);
-      continue;
-    }
-    std::vector<Hit>& list = out.lists[i];
-    list.resize(list.capacity() > 8 ? list.capacity() : 8);
-    const std::size_t n = accel.intersect_all(r[i], list.data(), list.size(), mask);
-    if (n > list.size()) {
-      list.resize(n);
-      accel.intersect_all(r[i], list.data(), n, mask);
-    }
-    list.resize(n);
-  }
-}
-
-/// Traces rays[begin, end) into `out` (the same indices).
-using ChunkTracer = std::function<void(std::size_t begin, std::size_t end, Answers& out)>;
-
-/// Packets of K consecutive rays; `masks` (one per ray) picks the masked query forms.
-template <int K>
-void trace_packets(const Accel& accel, const Ray* rays, const std::uint32_t* masks, std::size_t begin,
-                   std::size_t end, bool occluded, Answers& out) {
-  RayPacket<K> packet;
-  HitPacket<K> hits;
-  for (std::size_t i = begin; i < end; i += K) {
-    const int count = int(std::min<std::size_t>(K, end - i));
-    load(packet, rays + i, count);
-    if (occluded) {
-      const std::uint32_t mask = masks ? accel.occluded(packet, masks + i) : accel.occluded(packet);
-      for (int l = 0; l < count; ++l) out.blocked[i + l] = std::uint8_t((mask >> l) & 1u);
-    } else {
-      reset(hits);
-      masks ? accel.intersect(packet, hits, masks + i) : accel.intersect(packet, hits);
-      store(hits, out.hits.data() + i, count);
-    }
-  }
-}
-
-/// The excluding forms (--exclude: excluded[i] for ray i): single rays, or the batch call of
-/// the stream API per chunk (stream) or on the whole file (batch).
-ChunkTracer make_excluding_tracer(const Accel& accel, const Ray* r, const std::uint32_t* masks, const Hit* excluded,
-                                  bool single, bool occluded, int api_threads) {
-  if (single)
-    return [&accel, r, masks, excluded, occluded](std::size_t begin, std::size_t end, Answers& out) {
-      for (std::size_t i = begin; i < end; ++i) {
-        const std::uint32_t mask = masks ? masks[i] : kMaskAll;
-        if (occluded) out.blocked[i] = accel.occluded_excluding(r[i], excluded[i], mask) ? 1 : 0;
-        else out.hits[i] = accel.intersect_excluding(r[i], excluded[i], mask);
-      }
-    };
-  return [&accel, r, masks, excluded, occluded, api_threads](std::size_t begin, std::size_t end, Answers& out) {
-    const QueryArguments args{masks ? masks + begin : nullptr, excluded + begin, api_threads};
-    if (occluded) accel.occluded(r + begin, end - begin, out.blocked.data() + begin, args);
-    else accel.intersect(r + begin, end - begin, out.hits.data() + begin, args);
-  };
-}
-
-/// The tracer of one query mode; `masks` (one per ray, or null) picks the masked forms,
-/// `excluded` (one per ray, or null) the excluding forms.
-ChunkTracer make_tracer(const Accel& accel, const std::vector<Ray>& rays, const std::uint32_t* masks,
-                        const Hit* excluded, const std::string& mode, int packet, bool occluded, bool crossings,
-                        int threads) {
-  const Ray* r = rays.data();
-  if (excluded)
-    return make_excluding_tracer(accel, r, masks, excluded, mode == "single", occluded, mode == "batch" ? threads : 1);
-  if (crossings && (mode == "stream" || mode == "batch") && !masks) {
-    // --count on the stream API (Accel::count_intersections on a ray array: runs of rays
-    // go as packets), per chunk on the calling thread or the whole file on `threads`.
-    const int api_threads = mode == "batch" ? threads : 1;
-    return [&accel, r, api_threads](std::size_t begin, std::size_t end, Answers& out) {
-      accel.count_intersections(r + begin, end - begin, out.counts.data() + begin, api_threads);
-    };
-  }
-  if (crossings)
-    return [&accel, r, masks](std::size_t begin, std::size_t end, Answers& out) {
-      trace_crossings(accel, r, masks, begin, end, out);
-    };
-  if (mode == "packet") {
-    return [&accel, r, masks, packet, occluded](std::size_t begin, std::size_t end, Answers& out) {
-      if (packet == 4) trace_packets<4>(accel, r, masks, begin, end, occluded, out);
-      else if (packet == 8) trace_packets<8>(accel, r, masks, begin, end, occluded, out);
-      else trace_packets<16>(accel, r, masks, begin, end, occluded, out);
-    };
-  }
-  if (mode == "stream" || mode == "batch") {
-    // The stream API: on the calling thread (stream: the chunks are spread over threads by
-    // the caller), or on `threads` (batch: the whole file in one call, the library spreads it).
-    const int api_threads = mode == "batch" ? threads : 1;
-    return [&accel, r, masks, occluded, api_threads](std::size_t begin, std::size_t end, Answers& out) {
-      const std::uint32_t* m = masks ? masks + begin : nullptr;
-      if (occluded) {
-        m ? accel.occluded(r + begin, m, end - begin, out.blocked.data() + begin, api_threads)
-          : accel.occluded(r + begin, end - begin, out.blocked.data() + begin, api_threads);
-      } else {
-        m ? accel.intersect(r + begin, m, end - begin, out.hits.data() + begin, api_threads)
-          : accel.intersect(r + begin, end - begin, out.hits.data() + begin, api_threads);
-      }
-    };
-  }
-  return [&accel, r, masks, occluded](std::size_t begin, std::size_t end, Answers& out) {
-    if (occluded) {
-      for (std::size_t i = begin; i < end; ++i) out.blocked[i] = (masks ? accel.occluded(r[i], masks[i]) : accel.occluded(r[i])) ? 1 : 0;
-    } else {
-      for (std::size_t i = begin; i < end; ++i) out.hits[i] = masks ? accel.intersect(r[i], masks[i]) : accel.intersect(r[i]);
-    }
-  };
-}
-
-/// `trace`, then the geometric normals of the hits it found (--normals), on `threads` as
-/// the batch mode's call (1 where the caller spreads the chunks).
-ChunkTracer with_normals(const Accel& accel, ChunkTracer trace, int threads) {
-  return [&accel, trace = std::move(trace), threads](std::size_t begin, std::size_t end, Answers& out) {
-    trace(begin, end, out);
-    accel.geometric_normals(out.hits.data() + begin, end - begin, out.normals.data() + 3 * begin, threads);
-  };
-}
-
-/// One timed pass over all rays, in kChunk chunks: on the calling thread for one thread
-/// (no scheduler in the measurement), else spread by oneTBB inside `arena`; `whole`: in one
-/// call (the batch mode, which spreads the rays itself).
-double timed_pass(const ChunkTracer& trace, std::size_t count, int threads, tbb::task_arena& arena, Answers& out,
-                  bool whole) {
-  const auto start = std::chrono::steady_clock::now();
-  if (whole) {
-    trace(0, count, out);
-  } else if (threads == 1) {
-    for (std::size_t b = 0; b < count; b += kChunk) trace(b, std::min(count, b + kChunk), out);
-  } else {
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (count + kChunk - 1) / kChunk, 1),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t c = r.begin(); c < r.end(); ++c)
-                            trace(c * kChunk, std::min(count, (c + 1) * kChunk), out);
-                        });
-    });
-  }
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 /// The command line's options into `args`.
 void add_trace_options(CLI::App* cmd, TraceArgs* args) {
   cmd->add_option("scene", args->scene, "Scene file (.json) or mesh (.obj, .ply)")->required();
   cmd->add_option("--rays", args->rays, "Ray file (.vray) from `volley rays`")->required();
-  cmd->add_option("-o,--output", args->output, "Write the answers: a hit file (.vhit), or .vcnt / .vall with --count / --all");
-  auto* occluded = cmd->add_flag("--occluded", args->occluded, "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
-  auto* count = cmd->add_flag("--count", args->count,
-                              "Count every hit along each ray (crossings, each shared edge or vertex once: docs/crossings.md);\n"
-                              "-o writes a count file (.vcnt). Single rays, or the stream API with --mode stream or batch");
-  auto* all = cmd->add_flag("--all", args->all,
-                            "Every hit along each ray, nearest first; -o writes a hit-list file (.vall). Single rays only")
-                    ->excludes(occluded)
-                    ->excludes(count);
+  cmd->add_option("-o,--output", args->output,
+                  "Write the answers: a hit file (.vhit), or .vcnt / .vall with --count / --all");
+  auto* occluded = cmd->add_flag("--occluded", args->occluded,
+                                 "Occlusion (any hit) instead of the closest hit; .vhit t = 0 when blocked");
+  auto* count =
+      cmd->add_flag("--count", args->count,
+                    "Count every hit along each ray (crossings, each shared edge or vertex once: docs/crossings.md);\n"
+                    "-o writes a count file (.vcnt). Single rays, or the stream API with --mode stream or batch");
+  auto* all =
+      cmd->add_flag("--all", args->all,
+                    "Every hit along each ray, nearest first; -o writes a hit-list file (.vall). Single rays only")
+          ->excludes(occluded)
+          ->excludes(count);
   cmd->add_flag("--normals", args->normals,
                 "Also the geometric normal of every closest hit (Accel::geometric_normals, what Python's\n"
                 "cast_rays returns beside the hits), inside the timing: the C++ twin of cast_rays")
@@ -278,16 +121,16 @@ void add_trace_options(CLI::App* cmd, TraceArgs* args) {
 /// The pairs of options that have no form together: UsageError naming them.
 void check_option_pairs(const TraceArgs& a) {
   const bool crossings = a.count || a.all;
-  if (a.all && a.mode != "single")
-    throw UsageError("--all traces single rays: leave --mode at single");
-  if (a.count && a.mode == "packet")
-    throw UsageError("--count has no packet form: --mode single, stream or batch");
+  if (a.all && a.mode != "single") throw UsageError("--all traces single rays: leave --mode at single");
+  if (a.count && a.mode == "packet") throw UsageError("--count has no packet form: --mode single, stream or batch");
   if (a.count && a.mask && a.mode != "single")
     throw UsageError("--count with --mask traces single rays: leave --mode at single");
-  if (a.stats && crossings) throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
+  if (a.stats && crossings)
+    throw UsageError("--stats counts the closest-hit or occlusion walk: not with --count or --all");
   if (!a.exclude.empty() && (crossings || a.mode == "packet" || a.stats))
-    throw UsageError("--exclude has closest-hit and occlusion forms for single rays and arrays: not with --count,\n"
-                     "--all, --stats or --mode packet");
+    throw UsageError(
+        "--exclude has closest-hit and occlusion forms for single rays and arrays: not with --count,\n"
+        "--all, --stats or --mode packet");
 }
 
 /// What the answers found: closest hits, blocked rays, or every hit (crossings).
@@ -314,23 +157,31 @@ void print_result(const TraceArgs& a, const AccelInfo& info, std::size_t ray_cou
   const std::string mode = packet ? "packet" + std::to_string(packet) : a.mode;  // for the summary
   const std::string test(to_string(info.test)), isa(to_string(info.isa));
 
-  std::printf("trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
-              "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d "
-              "exclude=%s\n",
-              a.scene.c_str(), ray_count, a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads,
-              a.occluded ? 1 : 0, a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0,
-              info.reference_double ? 1 : 0, a.mask ? std::to_string(*a.mask).c_str() : "none", query,
-              a.normals ? 1 : 0, a.exclude.empty() ? "none" : a.exclude.c_str());
+  std::printf(
+      "trace: scene=%s rays=%zu mode=%s packet=%d test=%s isa=%s threads=%d occluded=%d reps=%d "
+      "best_s=%.6f median_s=%.6f Mrays/s=%.3f hits=%zu robust=%d reference=%d mask=%s query=%s normals=%d "
+      "exclude=%s\n",
+      a.scene.c_str(), ray_count, a.mode.c_str(), packet, test.c_str(), isa.c_str(), threads, a.occluded ? 1 : 0,
+      a.reps, best, median, mrays, hit_count, info.robust ? 1 : 0, info.reference_double ? 1 : 0,
+      a.mask ? std::to_string(*a.mask).c_str() : "none", query, a.normals ? 1 : 0,
+      a.exclude.empty() ? "none" : a.exclude.c_str());
   char found[96];
   const double share = ray_count == 0 ? 0.0 : double(hit_count) / double(ray_count);
-  if (crossings) std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);
-  else std::snprintf(found, sizeof found, "%zu %s (%.1f%%)", hit_count, a.occluded ? "blocked" : "hit", 100.0 * share);
-  std::printf("%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
-              "%.2f Mrays/s; %s; %s %.3f s\n",
-              a.scene.c_str(), ray_count, a.rays.c_str(),
-              a.occluded ? "occlusion" : a.count ? "crossing count" : a.all ? "all hits" : "closest hit", mode.c_str(),
-              test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps, mrays,
-              found, info.loaded ? "BVH loaded in" : "BVH built in", info.loaded ? info.load_seconds : info.build_seconds);
+  if (crossings)
+    std::snprintf(found, sizeof found, "%zu hits in all (%.2f per ray)", hit_count, share);
+  else
+    std::snprintf(found, sizeof found, "%zu %s (%.1f%%)", hit_count, a.occluded ? "blocked" : "hit", 100.0 * share);
+  std::printf(
+      "%s: %zu rays from %s, %s %s, %s/%s, %d thread%s: best %.2f ms (median %.2f ms) of %d, "
+      "%.2f Mrays/s; %s; %s %.3f s\n",
+      a.scene.c_str(), ray_count, a.rays.c_str(),
+      a.occluded ? "occlusion"
+      : a.count  ? "crossing count"
+      : a.all    ? "all hits"
+                 : "closest hit",
+      mode.c_str(), test.c_str(), isa.c_str(), threads, threads == 1 ? "" : "s", best * 1e3, median * 1e3, a.reps,
+      mrays, found, info.loaded ? "BVH loaded in" : "BVH built in",
+      info.loaded ? info.load_seconds : info.build_seconds);
 }
 
 /// An untimed pass of the single-ray walk, counting what it visits (--stats).
@@ -373,10 +224,10 @@ void write_answers(const TraceArgs& a, const Answers& answers, std::size_t ray_c
 
 Runner register_trace(CLI::App& app) {
   auto args = std::make_shared<TraceArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "trace",
-      "Trace a ray file (.vray) against a scene and print Mrays/s (best of --reps, intersection\n"
-      "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
+  CLI::App* cmd =
+      app.add_subcommand("trace",
+                         "Trace a ray file (.vray) against a scene and print Mrays/s (best of --reps, intersection\n"
+                         "time only). Prints one line `trace: key=value ...` for scripts, then a summary");
   add_trace_options(cmd, args.get());
 
   return [args]() {
@@ -403,14 +254,19 @@ Runner register_trace(CLI::App& app) {
                     a.packet, a.occluded, crossings, threads);
     if (a.normals) trace = with_normals(accel, std::move(trace), a.mode == "batch" ? threads : 1);
     Answers answers;
-    if (a.occluded) answers.blocked.assign(rays.size(), 0);
-    else if (a.count) answers.counts.assign(rays.size(), 0);
-    else if (a.all) answers.lists.resize(rays.size());
-    else answers.hits.assign(rays.size(), Hit{});
+    if (a.occluded)
+      answers.blocked.assign(rays.size(), 0);
+    else if (a.count)
+      answers.counts.assign(rays.size(), 0);
+    else if (a.all)
+      answers.lists.resize(rays.size());
+    else
+      answers.hits.assign(rays.size(), Hit{});
     if (a.normals) answers.normals.assign(3 * rays.size(), 0.0f);
 
     std::vector<double> seconds;
-    for (int rep = 0; rep < a.reps; ++rep) seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers, a.mode == "batch"));
+    for (int rep = 0; rep < a.reps; ++rep)
+      seconds.push_back(timed_pass(trace, rays.size(), threads, arena, answers, a.mode == "batch"));
     std::sort(seconds.begin(), seconds.end());
     const double best = seconds.front();
     const double median = seconds[seconds.size() / 2];

@@ -99,6 +99,16 @@ template <class T>
 /// (crossing_inside) instead of going with either sign, so a ray through a shared edge or
 /// vertex hits exactly one of the triangles there that it crosses (docs/crossings.md).
 /// Pure function, thread safe.
+///
+/// The prefilter before the division: the scaled hit distance t * det is tested against
+/// [tmin, tmax] * |det| with det's sign folded in, so most rejected candidates need no
+/// division (paper, section 3.5); false for NaN. It never rejects a t that the quotient test
+/// accepts. Upper end: t < tmax in float means t_scaled / det < tmax exactly (rounding is
+/// monotonic and tmax a float), so ts < tmax * |det| exactly and ts <= fl(tmax * |det|),
+/// subnormal products included. A strict ts < fl(tmax * |det|) rejected triangles 1 ulp
+/// nearer than the current hit (rays aimed at shared vertices), and the closest hit depended
+/// on the visiting order. Lower end: tmin widened by kScaledPad (2 eps, more than the
+/// rounding of the quotient and of the products). The SIMD kernels compute the same bounds.
 template <class T, bool Fused = false, bool Crossing = false>
 bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>& p0, const Vec3<T>& p1,
                           const Vec3<T>& p2, TriHit<T>& hit) {
@@ -159,15 +169,7 @@ bool intersect_watertight(const RayT<T>& ray, const WoopRay<T>& w, const Vec3<T>
   const T det = eu + ev + ew;
   if (!(std::abs(det) > 0 && std::abs(det) <= std::numeric_limits<T>::max())) return false;
 
-  // Scaled hit distance t * det, tested against [tmin, tmax] * |det| with det's sign folded
-  // in, so most rejected candidates need no division (paper, section 3.5). False for NaN.
-  // A prefilter only, which never rejects a t that the quotient test below accepts. Upper
-  // end: t < tmax in float means t_scaled / det < tmax exactly (rounding is monotonic and
-  // tmax a float), so ts < tmax * |det| exactly and ts <= fl(tmax * |det|), subnormal
-  // products included. A strict ts < fl(tmax * |det|) rejected triangles 1 ulp nearer than
-  // the current hit (rays aimed at shared vertices), and the closest hit depended on the
-  // visiting order. Lower end: tmin widened by kScaledPad (2 eps, more than the rounding of
-  // the quotient and of the products). The SIMD kernels compute the same bounds.
+  // Scaled hit distance t * det against [tmin, tmax] * |det| (the prefilter: see above).
   const T az = w.sz * a[w.kz];
   const T bz = w.sz * b[w.kz];
   const T cz = w.sz * c[w.kz];

@@ -34,12 +34,13 @@ Bounds scene_bounds(const io::SceneDesc& desc) {
   std::vector<Bounds> objects(desc.mesh.objects.size());
   std::vector<bool> known(desc.mesh.objects.size(), false);
   for (const io::InstanceDesc& in : desc.instances) {
-    if (!known[in.object]) objects[in.object] = object_bounds(desc.mesh, desc.mesh.objects[in.object]), known[in.object] = true;
+    if (!known[in.object])
+      objects[in.object] = object_bounds(desc.mesh, desc.mesh.objects[in.object]), known[in.object] = true;
     const Bounds& o = objects[in.object];
     if (!(o.lo.x <= o.hi.x)) continue;
     for (int c = 0; c < 8; ++c)
-      b.extend(glm::vec3(in.transform * glm::vec4(c & 1 ? o.hi.x : o.lo.x, c & 2 ? o.hi.y : o.lo.y,
-                                                   c & 4 ? o.hi.z : o.lo.z, 1.0f)));
+      b.extend(glm::vec3(in.transform *
+                         glm::vec4(c & 1 ? o.hi.x : o.lo.x, c & 2 ? o.hi.y : o.lo.y, c & 4 ? o.hi.z : o.lo.z, 1.0f)));
   }
   return b;
 }
@@ -84,9 +85,20 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
 
   // One geometry per object (a whole mesh made by hand, without objects, is one), then one
   // per polygon; prim_index() turns a hit back into the merged mesh's numbering.
+  const bool load = !structure.empty();
+  add_objects(desc, load);
+  add_polygons(desc, load);
+  add_instances(desc, options);
+  if (load)
+    load_structure(structure);
+  else
+    accel_.commit(options);
+  note_features();
+}
+
+void Scene::add_objects(const io::SceneDesc& desc, bool load) {
   std::vector<io::ObjectDesc> objects = desc.mesh.objects;
   if (objects.empty() && !indices_.empty()) objects.push_back({"mesh", 0, indices_.size() / 3});
-  const bool load = !structure.empty();
   for (const io::ObjectDesc& o : objects) {
     if (positions_.empty()) break;
     if (!load) {
@@ -96,6 +108,9 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     }
     geometry_base_.push_back(static_cast<std::uint32_t>(o.first_triangle));
   }
+}
+
+void Scene::add_polygons(const io::SceneDesc& desc, bool load) {
   for (const auto& poly : desc.polygons) {
     geometry_base_.push_back(static_cast<std::uint32_t>(indices_.size() / 3 + polygons_.size()));
     try {
@@ -120,21 +135,21 @@ Scene::Scene(const io::SceneDesc& desc, int width, int height, const Options& op
     centroid /= double(v.size());
     polygons_.push_back({unit, float(glm::dot(glm::dvec3(unit), centroid)), poly.material});
   }
-  add_instances(desc, options);
-  if (load) {
-    accel_ = Accel::load(structure);
-    const AccelInfo info = accel_.info();
-    if (info.geometries != geometry_base_.size() || info.triangles != indices_.size() / 3 ||
-        info.polygons != polygons_.size())
-      throw Error(structure + " holds " + std::to_string(info.geometries) + " geometries (" +
-                  std::to_string(info.triangles) + " triangles, " + std::to_string(info.polygons) +
-                  " polygons), the scene " + std::to_string(geometry_base_.size()) + " (" +
-                  std::to_string(indices_.size() / 3) + ", " + std::to_string(polygons_.size()) +
-                  "): it was saved from another scene");
-  } else {
-    accel_.commit(options);
-  }
+}
 
+void Scene::load_structure(const std::string& structure) {
+  accel_ = Accel::load(structure);
+  const AccelInfo info = accel_.info();
+  if (info.geometries != geometry_base_.size() || info.triangles != indices_.size() / 3 ||
+      info.polygons != polygons_.size())
+    throw Error(structure + " holds " + std::to_string(info.geometries) + " geometries (" +
+                std::to_string(info.triangles) + " triangles, " + std::to_string(info.polygons) +
+                " polygons), the scene " + std::to_string(geometry_base_.size()) + " (" +
+                std::to_string(indices_.size() / 3) + ", " + std::to_string(polygons_.size()) +
+                "): it was saved from another scene");
+}
+
+void Scene::note_features() {
   features_.lights = !lights_.empty();
   features_.polygons = !polygons_.empty();
   features_.smooth_normals = !corner_normals_.empty();

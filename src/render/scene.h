@@ -2,10 +2,9 @@
 // lights, per-primitive normals) and the camera. Built once from a SceneDesc.
 #pragma once
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "core/camera.h"
 #include "io/scene_desc.h"
@@ -34,11 +33,11 @@ struct SceneFeatures {
 
 /// A surface point ready for shading.
 struct SurfacePoint {
-  glm::vec3 p;           ///< hit point, from barycentrics (triangles) or the plane (polygons)
-  glm::vec3 p_error;     ///< absolute error bound of p per axis
-  glm::vec3 ng;          ///< unit geometric normal, facing the incoming ray
-  glm::vec3 ns;          ///< unit shading normal, same hemisphere as ng
-  bool front = true;     ///< the ray hit the side the geometric normal points to (outside)
+  glm::vec3 p;        ///< hit point, from barycentrics (triangles) or the plane (polygons)
+  glm::vec3 p_error;  ///< absolute error bound of p per axis
+  glm::vec3 ng;       ///< unit geometric normal, facing the incoming ray
+  glm::vec3 ns;       ///< unit shading normal, same hemisphere as ng
+  bool front = true;  ///< the ray hit the side the geometric normal points to (outside)
   std::uint32_t material = 0;
 };
 
@@ -65,7 +64,8 @@ class Scene {
     p0 = positions_[idx[0]], p1 = positions_[idx[1]], p2 = positions_[idx[2]];
     if (hit.inst == kInvalidId) return;
     const glm::mat4& m = instances_[instance_slot_[hit.inst]].to_world;
-    p0 = glm::vec3(m * glm::vec4(p0, 1.0f)), p1 = glm::vec3(m * glm::vec4(p1, 1.0f)), p2 = glm::vec3(m * glm::vec4(p2, 1.0f));
+    p0 = glm::vec3(m * glm::vec4(p0, 1.0f)), p1 = glm::vec3(m * glm::vec4(p1, 1.0f)),
+    p2 = glm::vec3(m * glm::vec4(p2, 1.0f));
   }
   const core::Camera& camera() const { return camera_; }
   const std::vector<io::Material>& materials() const { return materials_; }
@@ -113,13 +113,20 @@ class Scene {
   /// per instance, its transform; instance_slot_ maps a geometry id to its entry.
   struct InstanceShading {
     glm::mat4 to_world;
-    glm::mat3 normal;      ///< inverse transpose of the 3x3 part
-    float translation;     ///< largest |translation| (for the hit point's error bound)
+    glm::mat3 normal;   ///< inverse transpose of the 3x3 part
+    float translation;  ///< largest |translation| (for the hit point's error bound)
   };
   std::vector<Accel> prototypes_;
   std::vector<InstanceShading> instances_;
   std::vector<std::uint32_t> instance_slot_;
+  // The constructor's steps: the geometries added to accel_ (or only counted when `load`,
+  // the structure coming from a saved file), the saved structure checked against them, the
+  // features the pipeline reads.
+  void add_objects(const io::SceneDesc& desc, bool load);
+  void add_polygons(const io::SceneDesc& desc, bool load);
   void add_instances(const io::SceneDesc& desc, const Options& options);
+  void load_structure(const std::string& structure);
+  void note_features();
 };
 
 /// scene.features() with the closed-and-opaque analysis filled in (closed, open_edges) from

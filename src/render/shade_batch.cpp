@@ -52,42 +52,32 @@ void set_row3(float* rows, std::size_t stride, int row, std::size_t k, const glm
   rows[(row + 2) * stride + k] = a.z;
 }
 
-}  // namespace
+/// shade_batch where nothing reads the surface point: each triangle hit's continuation from
+/// its material alone, the other hits one at a time.
+void shade_materials_only(const Scene& scene, const BatchShading& how, const PathState* paths, const Hit* hits,
+                          std::size_t n, int max_depth, std::vector<PathState>& next, std::vector<ShadowQuery>& shadows,
+                          glm::vec3* sum) {
+  const std::size_t triangles = scene.triangle_count();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Hit& h = hits[i];
+    if (!h.hit() || scene.prim_index(h) >= triangles) {
+      sum[paths[i].pixel] += how.one(scene, paths[i], h, max_depth, next, shadows);
+      continue;
+    }
+    SurfacePoint sp;
+    sp.material = scene.triangle_materials()[scene.prim_index(h)];
+    sum[paths[i].pixel] += how.then(scene, paths[i], sp, glm::vec3(0.0f), max_depth, next);
+  }
+}
 
-void shade_batch(const Scene& scene, const BatchShading& how, const PathState* paths, const Hit* hits, std::size_t n,
-                 int max_depth, std::vector<PathState>& next, std::vector<ShadowQuery>& shadows, glm::vec3* sum) {
+/// Gathers the triangle hits into the lanes of `rows` (lane_of[i]: hit i's lane, or
+/// kNotInLanes); misses, polygon hits and hits through instances (their vertices and error
+/// bound are transformed: Scene::surface_as) stay out. Returns the lanes filled.
+std::size_t gather_lanes(const Scene& scene, const PathState* paths, const Hit* hits, std::size_t n, float* rows,
+                         std::size_t stride, std::uint32_t* lane_of) {
   const std::size_t triangles = scene.triangle_count();
   const glm::vec3* pos = scene.positions().data();
   const std::uint32_t* idx = scene.indices().data();
-  const std::uint32_t* tri_material = scene.triangle_materials().data();
-  const std::vector<io::Material>& materials = scene.materials();
-  const std::vector<io::PointLight>& lights = scene.lights();
-  const std::size_t light_count = (how.stages & kShadows) != 0 ? lights.size() : 0;
-  const LaneKernels kernels = kernels_for(how.isa);
-  // Per thread and reused: this runs once per bounce of every tile.
-  thread_local std::vector<float> surface_buffer, light_buffer;
-  thread_local std::vector<std::uint32_t> lane_of;
-
-  // Nothing reads the surface point (no lights, and a continuation that only needs the
-  // material): skip the lanes altogether.
-  if (light_count == 0 && !how.then_reads_surface) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const Hit& h = hits[i];
-      if (!h.hit() || scene.prim_index(h) >= triangles) {
-        sum[paths[i].pixel] += how.one(scene, paths[i], h, max_depth, next, shadows);
-        continue;
-      }
-      SurfacePoint sp;
-      sp.material = tri_material[scene.prim_index(h)];
-      sum[paths[i].pixel] += how.then(scene, paths[i], sp, glm::vec3(0.0f), max_depth, next);
-    }
-    return;
-  }
-  // Gather the triangle hits into lanes; misses, polygon hits and hits through instances
-  // (their vertices and error bound are transformed: Scene::surface_as) stay out.
-  const std::size_t stride = (n + kRowAlign - 1) / kRowAlign * kRowAlign;
-  float* rows = aligned_floats(surface_buffer, kSurfaceRows * stride);
-  lane_of.resize(n);
   std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Hit& h = hits[i];
@@ -105,9 +95,13 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
     set_row3(rows, stride, kDirX, count, {r.dir[0], r.dir[1], r.dir[2]});
     lane_of[i] = std::uint32_t(count++);
   }
-  // Padding lanes up to the lane count: a unit triangle seen by a unit ray (no NaN, no
-  // subnormals to slow the lanes down).
-  const std::size_t padded = (count + kernels.lanes - 1) / kernels.lanes * kernels.lanes;
+  return count;
+}
+
+/// Pads the lanes from `count` up to a multiple of `lanes` with a unit triangle seen by a
+/// unit ray (no NaN, no subnormals to slow the lanes down); returns the padded count.
+std::size_t pad_lanes(float* rows, std::size_t stride, std::size_t count, std::size_t lanes) {
+  const std::size_t padded = (count + lanes - 1) / lanes * lanes;
   for (std::size_t k = count; k < padded; ++k) {
     set_row3(rows, stride, kP0X, k, {0.0f, 0.0f, 0.0f});
     set_row3(rows, stride, kP1X, k, {1.0f, 0.0f, 0.0f});
@@ -115,6 +109,49 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
     rows[kU * stride + k] = rows[kV * stride + k] = 0.25f;
     set_row3(rows, stride, kDirX, k, {0.0f, 0.0f, 1.0f});
   }
+  return padded;
+}
+
+/// Lane k's shadow rays, one per light that lights it, weighted by its Phong term.
+void push_shadow_rays(const io::Material& m, const std::vector<io::PointLight>& lights, std::size_t light_count,
+                      const PathState& path, const float* light_rows, std::size_t stride, std::size_t k,
+                      std::vector<ShadowQuery>& shadows) {
+  const bool specular = m.specular != glm::vec3(0.0f);
+  if (m.diffuse == glm::vec3(0.0f) && !specular) return;
+  for (std::size_t j = 0; j < light_count; ++j) {
+    const float* l = light_rows + j * kLightRows * stride;
+    const float n_dot_l = l[kNDotL * stride + k];
+    if (n_dot_l <= 0.0f) continue;  // the light is behind the surface (NaN stays lit, as in the scalar test)
+    glm::vec3 c = m.diffuse * n_dot_l;
+    const float r_dot_v = l[kRDotV * stride + k];
+    if (specular && r_dot_v > 0.0f) c += m.specular * std::pow(r_dot_v, m.shininess);
+    const glm::vec3 o = row3(l, stride, kOrgX, k), d = row3(l, stride, kShadowX, k);
+    shadows.push_back({Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, 1.0f},
+                       path.weight * c * lights[j].intensity / l[kDist2 * stride + k], path.pixel});
+  }
+}
+
+}  // namespace
+
+void shade_batch(const Scene& scene, const BatchShading& how, const PathState* paths, const Hit* hits, std::size_t n,
+                 int max_depth, std::vector<PathState>& next, std::vector<ShadowQuery>& shadows, glm::vec3* sum) {
+  const std::vector<io::PointLight>& lights = scene.lights();
+  const std::size_t light_count = (how.stages & kShadows) != 0 ? lights.size() : 0;
+  // Nothing reads the surface point (no lights, and a continuation that only needs the
+  // material): skip the lanes altogether.
+  if (light_count == 0 && !how.then_reads_surface) {
+    shade_materials_only(scene, how, paths, hits, n, max_depth, next, shadows, sum);
+    return;
+  }
+  const LaneKernels kernels = kernels_for(how.isa);
+  // Per thread and reused: this runs once per bounce of every tile.
+  thread_local std::vector<float> surface_buffer, light_buffer;
+  thread_local std::vector<std::uint32_t> lane_of;
+  const std::size_t stride = (n + kRowAlign - 1) / kRowAlign * kRowAlign;
+  float* rows = aligned_floats(surface_buffer, kSurfaceRows * stride);
+  lane_of.resize(n);
+  const std::size_t count = gather_lanes(scene, paths, hits, n, rows, stride, lane_of.data());
+  const std::size_t padded = pad_lanes(rows, stride, count, kernels.lanes);
   float* light_rows = aligned_floats(light_buffer, std::max<std::size_t>(1, light_count) * kLightRows * stride);
   if (padded != 0) {
     kernels.surfaces(rows, stride, padded);
@@ -134,22 +171,8 @@ void shade_batch(const Scene& scene, const BatchShading& how, const PathState* p
       continue;
     }
     SurfacePoint sp;
-    sp.material = tri_material[scene.prim_index(hits[i])];
-    const io::Material& m = materials[sp.material];
-    const bool specular = m.specular != glm::vec3(0.0f);
-    if (m.diffuse != glm::vec3(0.0f) || specular) {
-      for (std::size_t j = 0; j < light_count; ++j) {
-        const float* l = light_rows + j * kLightRows * stride;
-        const float n_dot_l = l[kNDotL * stride + k];
-        if (n_dot_l <= 0.0f) continue;  // the light is behind the surface (NaN stays lit, as in the scalar test)
-        glm::vec3 c = m.diffuse * n_dot_l;
-        const float r_dot_v = l[kRDotV * stride + k];
-        if (specular && r_dot_v > 0.0f) c += m.specular * std::pow(r_dot_v, m.shininess);
-        const glm::vec3 o = row3(l, stride, kOrgX, k), d = row3(l, stride, kShadowX, k);
-        shadows.push_back({Ray{{o.x, o.y, o.z}, 0.0f, {d.x, d.y, d.z}, 1.0f},
-                           path.weight * c * lights[j].intensity / l[kDist2 * stride + k], path.pixel});
-      }
-    }
+    sp.material = scene.triangle_materials()[scene.prim_index(hits[i])];
+    push_shadow_rays(scene.materials()[sp.material], lights, light_count, path, light_rows, stride, k, shadows);
     glm::vec3 view_dir(0.0f);
     if (how.then_reads_surface) {
       sp.p = row3(rows, stride, kPX, k);
