@@ -30,6 +30,15 @@ struct ChildHits<Arch, true> {
   __m256i refs;
 };
 
+/// The hits of entered children `bits` without mask registers: the first reference read
+/// at the first bit.
+template <class Arch>
+[[gnu::always_inline]] inline ChildHits<Arch> child_hits(std::uint32_t bits, const std::uint32_t* child) {
+  ChildHits<Arch> hits{bits, 0};
+  if (bits) hits.first_ref = child[std::countr_zero(bits)];
+  return hits;
+}
+
 /// Eight float lanes, one per child of a WideNode<8>: one AVX register (AVX2 and AVX-512,
 /// whose 16 lanes would be half empty), or two SSE registers. Raw intrinsics (always
 /// inlined, no symbols) inside members of a class templated on Arch.
@@ -71,9 +80,7 @@ struct Lanes8<Arch, true> {
           _mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_maskz_compress_epi32(k, refs))));
       return {k, first, k, refs};
     } else {
-      ChildHits<Arch> hits{le(entry, exit), 0};
-      if (hits.bits) hits.first_ref = child[std::countr_zero(hits.bits)];
-      return hits;
+      return child_hits<Arch>(le(entry, exit), child);
     }
   }
   /// Mask registers: the second entered child's reference, and the first two entered
@@ -116,9 +123,7 @@ struct Lanes8<Arch, false> {
     _mm_store_ps(p + 4, x.b);
   }
   static ChildHits<Arch> entered(V entry, V exit, const std::uint32_t* child) {
-    ChildHits<Arch> hits{le(entry, exit), 0};
-    if (hits.bits) hits.first_ref = child[std::countr_zero(hits.bits)];
-    return hits;
+    return child_hits<Arch>(le(entry, exit), child);
   }
 };
 

@@ -130,14 +130,11 @@ int run_query(const QueryArgs& a) {
   const int threads = a.threads ? a.threads : tbb::this_task_arena::max_concurrency();
   PointAnswers answers;
   const std::vector<double> seconds = time_queries(a, accel, xyz, threads, answers);
-  const std::vector<std::uint8_t>& inside = answers.inside;
-  const std::vector<float>& dist = answers.dist;
-  const std::vector<ClosestPoint>& closest = answers.closest;
   const double best = seconds.front(), median = seconds[seconds.size() / 2];
   std::size_t found = 0, in = 0;
-  for (std::uint8_t b : inside) in += b;
-  for (float d : dist) found += std::isfinite(d), in += d < 0.0f;
-  for (const ClosestPoint& c : closest) found += c.found();
+  for (std::uint8_t b : answers.inside) in += b;
+  for (float d : answers.dist) found += std::isfinite(d), in += d < 0.0f;
+  for (const ClosestPoint& c : answers.closest) found += c.found();
   const double mpoints = best > 0.0 ? double(n) / best * 1e-6 : 0.0;
   const std::string test(to_string(info.test)), isa(to_string(info.isa));
   std::printf(
