@@ -152,19 +152,12 @@ void Accel::commit(const Options& options) {
 
 Hit Accel::intersect(const Ray& ray) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
-  if (const accel::WideAccel* w = impl_->wide_only) {
-    Hit hit;
-    w->intersect(ray, hit);
-    impl_->attribute(hit.prim, hit.geom);
-    return hit;
-  }
-  return impl_->intersect(ray, kMaskAll);
+  return impl_->intersect(ray);
 }
 
 bool Accel::occluded(const Ray& ray) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
-  if (const accel::WideAccel* w = impl_->wide_only) return w->occluded(ray);
-  return impl_->occluded(ray, kMaskAll);
+  return impl_->occluded(ray);
 }
 
 Hit Accel::intersect(const Ray& ray, std::uint32_t mask) const {
@@ -281,9 +274,9 @@ void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, 
 
 WalkCounts Accel::walk_counts(const Ray& ray, bool any_hit) const {
   if (!impl_->committed) throw Error("walk_counts: call commit() after adding geometry");
-  if (!impl_->wide_only)
-    throw Error("walk_counts: only for a scene of triangles in one layer, without instances, on a SIMD ISA");
-  return impl_->wide_only->walk_counts(ray, any_hit);
+  const accel::WideAccel* wide = impl_->queries.wide;
+  if (!wide) throw Error("walk_counts: only for a scene of triangles in one layer, without instances, on a SIMD ISA");
+  return wide->walk_counts(ray, any_hit);
 }
 
 // The packet widths of the API.

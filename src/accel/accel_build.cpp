@@ -75,8 +75,7 @@ void Accel::Impl::exclude_others(Layer& layer) const {
 void Accel::Impl::build() {
   const std::size_t n = triangle_ids.size();
   layers.clear();
-  wide_only = nullptr;
-  stream_walk = false;
+  choose_queries();  // none of the old layers' engines is called from here on
   degenerate = 0;
   disabled = 0;
   // Triangles of moved geometries (update_vertices) go into the tree even when degenerate,
@@ -142,24 +141,12 @@ void Accel::Impl::build_polygons(Layer& layer) {
 void Accel::Impl::finish_build() {
   build_instances();
   compute_bound_parts();
-  wide_only = layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances
-                  ? layers[0].triangle_engine->wide()
-                  : nullptr;
-  stream_walk = wide_only != nullptr;  // wide kernels exist on every SIMD ISA, all with the walk
   one_geometry = geometries.size() == 1 && !geometries[0].instance;
   id_starts.clear();
   for (std::size_t g = 0; g < geometries.size(); ++g)
     if (!geometries[g].instance && geometries[g].count != 0)
       id_starts.emplace_back(geometries[g].first, static_cast<std::uint32_t>(g));
-  simple = layers.size() == 1 && !has_instances;
-  simple_mask = simple ? layers[0].mask : 0u;
-  simple_triangles = simple ? layers[0].triangle_engine.get() : nullptr;
-  simple_polygons = simple ? layers[0].polygon_engine.get() : nullptr;
-  stream_packets = !layers.empty() && (!has_instances || isa != Isa::scalar) &&
-                   std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
-                     return l.triangle_engine ? l.triangle_engine->traces_packets()
-                                              : !l.polygon_engine && !l.instances.empty();
-                   });
+  choose_queries();
   topology_changed = vertices_changed = refitted = false;
   built_with = Options{};
   built_with.test = test, built_with.isa = isa, built_with.robust = robust;

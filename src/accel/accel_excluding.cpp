@@ -40,33 +40,11 @@ std::uint32_t Accel::Impl::excluded_elsewhere(const char* caller, const Hit& exc
 }
 
 Hit Accel::Impl::intersect_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
-  const std::uint32_t id = excluded_id("intersect_excluding", excluded);
-  Hit hit;
-  if (wide_only) {  // one wide BVH of triangles: the kernels directly, as intersect's shortcut
-    if (simple_mask & mask) wide_only->intersect(ray, id, hit);
-    attribute(hit.prim, hit.geom);
-    return hit;
-  }
-  for (const Layer& l : layers) {
-    if (!(l.mask & mask)) continue;
-    if (l.triangle_engine) l.triangle_engine->intersect_excluding(ray, id, hit);
-    if (l.polygon_engine) l.polygon_engine->intersect_excluding(ray, id, hit);
-  }
-  attribute(hit.prim, hit.geom);
-  if (has_instances) intersect_instances(ray, mask, hit, &excluded);
-  return hit;
+  return queries.intersect_excluding(*this, ray, mask, excluded_id("intersect_excluding", excluded), excluded);
 }
 
 bool Accel::Impl::occluded_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
-  const std::uint32_t id = excluded_id("occluded_excluding", excluded);
-  if (wide_only) return (simple_mask & mask) && wide_only->occluded(ray, id);
-  for (const Layer& l : layers) {
-    if (!(l.mask & mask)) continue;
-    if ((l.triangle_engine && l.triangle_engine->occluded_excluding(ray, id)) ||
-        (l.polygon_engine && l.polygon_engine->occluded_excluding(ray, id)))
-      return true;
-  }
-  return has_instances && occluded_instances(ray, mask, &excluded);
+  return queries.occluded_excluding(*this, ray, mask, excluded_id("occluded_excluding", excluded), excluded);
 }
 
 Hit Accel::intersect_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask) const {

@@ -42,6 +42,8 @@ inline Ray contains_ray(const float* p) {
 }
 
 struct Accel::Impl {
+  Impl();
+
   /// One add_triangles / add_polygon call: its primitives have the internal ids first ..
   /// first + count (the engines answer with those; attribute() turns one back into the
   /// geometry and the index within it).
@@ -140,20 +142,52 @@ struct Accel::Impl {
   bool loaded = false;               ///< the structure came from a file (AccelInfo::loaded)
   double load_seconds = 0.0;
 
-  /// The wide BVH when it holds the whole scene (one layer, no polygons), else null:
-  /// Accel's single-ray queries and full packets without a ray mask call it directly (a
-  /// layer of calls less).
-  const accel::WideAccel* wide_only = nullptr;
-  /// The engines of the only layer when there is one and no instances (the common scene:
-  /// its queries skip the layer loop), else both null and `simple` false.
-  bool simple = false;
-  std::uint32_t simple_mask = kMaskAll;
-  const accel::TriangleEngine* simple_triangles = nullptr;
-  const accel::Engine* simple_polygons = nullptr;
-  /// Streams may go as packets (stream.cpp): every layer has a triangle engine that traces
-  /// packets (or only instances), and instances, if any, have packet walks (a SIMD ISA).
-  /// Every-hit streams go as packets only without instances.
-  bool stream_packets = false;
+  /// What the stream policy (stream.cpp) may do with the committed scene.
+  struct StreamPlan {
+    /// Runs of 16 rays may go as packets: every layer traces packets (or holds only
+    /// instances), and instances, if any, have packet walks (a SIMD ISA).
+    bool packets = false;
+    /// Runs of mixed octants may go as packets too: closest-hit runs when the packet shares
+    /// the instances' top level (perf/instances.md); runs whose walk needs no order
+    /// (occlusion, every hit) then and on AVX-512 and AVX2 (perf/rays.md).
+    bool mixed_closest = false;
+    bool mixed_any = false;
+    /// Every-hit runs may go as packets (packets, and no instances).
+    bool every_hit_packets = false;
+  };
+  /// The committed scene's entry points for the queries and forms that some scenes answer
+  /// faster another way. Each starts as the layer walk's form, which answers any scene
+  /// (LayerWalk, scene_queries.cpp), and a scene that is one wide BVH of triangles takes the
+  /// kernels' own (WideDirect). Chosen at commit (choose_queries): the queries call them and
+  /// never ask what the scene holds. Single rays answer attributed; full packets (16 lanes,
+  /// all active, no masks) answer as the engines do (prim an internal id).
+  struct Queries {
+    /// Single rays of every mask (kMaskAll), the hot path: fn(unmasked_target, ...), the
+    /// kernels' own entries for a scene that is one wide BVH. They answer as the engines do
+    /// (prim an internal id) or, through an instance, complete (inst set): see unmasked().
+    void (*intersect_unmasked)(const void* target, const Ray&, Hit&);
+    bool (*occluded_unmasked)(const void* target, const Ray&);
+    const void* unmasked_target;
+    Hit (*intersect)(const Impl&, const Ray&, std::uint32_t mask);
+    bool (*occluded)(const Impl&, const Ray&, std::uint32_t mask);
+    /// `id`: excluded_id(excluded).
+    Hit (*intersect_excluding)(const Impl&, const Ray&, std::uint32_t mask, std::uint32_t id, const Hit& excluded);
+    bool (*occluded_excluding)(const Impl&, const Ray&, std::uint32_t mask, std::uint32_t id, const Hit& excluded);
+    void (*intersect_full)(const Impl&, const RayPacket<16>&, HitPacket<16>&);
+    std::uint32_t (*occluded_full)(const Impl&, const RayPacket<16>&);
+    /// The wide BVH of a scene that is one, else null: the direct forms, the stream walk
+    /// (simd/wide/stream_walk.h: every SIMD ISA has it), double packets and walk_counts
+    /// take it. `wide_mask`: its layer's mask.
+    const accel::WideAccel* wide = nullptr;
+    std::uint32_t wide_mask = 0;
+    StreamPlan stream;
+  };
+  /// The layers one by one: every scene's forms. The kernels directly: a scene that is one wide BVH.
+  struct LayerWalk;
+  struct WideDirect;
+  Queries queries;
+  /// Fills `queries` for the committed layers (after a build, refit or load).
+  void choose_queries();
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
   std::uint32_t new_geometry(std::uint32_t count, bool polygon);
@@ -192,7 +226,7 @@ struct Accel::Impl {
   void exclude_others(Layer& layer) const;
   /// Builds a layer's polygon engine over its enabled polygon geometries (none: no engine).
   void build_polygons(Layer& layer);
-  /// Sets wide_only, one_geometry and the refit state after a build or a load.
+  /// Sets one_geometry, the refit state and the queries (choose_queries) after a build or a load.
   void finish_build();
   /// Refits the triangle engines to moved vertices when that is allowed and pays (see
   /// Options::refit); false (nothing built) when the caller must build instead.
@@ -222,8 +256,16 @@ struct Accel::Impl {
 
   // Queries (accel_query.cpp, stream.cpp): rays see the layers whose mask shares a bit with
   // `mask` (kMaskAll for the queries without a mask); mask 0 sees nothing.
-  Hit intersect(const Ray& ray, std::uint32_t mask) const;
-  bool occluded(const Ray& ray, std::uint32_t mask) const;
+  Hit intersect(const Ray& ray, std::uint32_t mask) const { return queries.intersect(*this, ray, mask); }
+  /// The closest hit and the occlusion of a ray of every mask (Queries::intersect_unmasked).
+  Hit intersect(const Ray& ray) const {
+    Hit hit;
+    queries.intersect_unmasked(queries.unmasked_target, ray, hit);
+    if (hit.inst == kInvalidId) attribute(hit.prim, hit.geom);
+    return hit;
+  }
+  bool occluded(const Ray& ray) const { return queries.occluded_unmasked(queries.unmasked_target, ray); }
+  bool occluded(const Ray& ray, std::uint32_t mask) const { return queries.occluded(*this, ray, mask); }
   /// Packets: masks[i] is lane i's mask; null = kMaskAll for every lane.
   template <int K>
   void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
@@ -249,10 +291,8 @@ struct Accel::Impl {
   /// masks: one per ray, or null.
   void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
   void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
-  /// Streams hand their incoherent runs to the stream walk (simd/wide/stream_walk.h, see
-  /// stream.cpp): a scene that is one wide BVH (wide_only) on a SIMD ISA (AVX-512, AVX2,
-  /// SSE4.2); set with wide_only. A stream needs at least kStreamWalkRays such rays.
-  bool stream_walk = false;
+  /// A stream hands its incoherent runs to the stream walk (queries.wide) when it has at
+  /// least this many such rays.
   static constexpr std::size_t kStreamWalkRays = 256;
   AccelInfo info() const;
   /// Every hit of the layers `mask` selects, instances included, appended to `out`
@@ -301,8 +341,12 @@ struct Accel::Impl {
     }
     return out;
   }
+  /// The packet forms over the layers alone: a full packet without masks by the scene's
+  /// own form (Queries), any other lane by lane's mask through widened copies.
   template <int K>
   void trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;
+  template <int K>
+  std::uint32_t occluded_by_layers(const RayPacket<K>& rays, const std::uint32_t* masks) const;
 };
 
 }  // namespace volley

@@ -1,5 +1,6 @@
-// Accel::Impl's queries: single rays and packets through the layers a ray's mask selects,
-// triangles then polygons in each, the answer attributed to its geometry.
+// Accel::Impl's packet queries: the lanes through the layers their masks select, triangles
+// then polygons in each, the answers attributed to their geometry, then the instances. A
+// full packet without masks takes the scene's own form (Queries::intersect_full).
 #include <cmath>
 #include <cstring>
 
@@ -15,44 +16,6 @@ bool all_lanes_active(const RayPacket<K>& p) {
 }
 
 }  // namespace
-
-Hit Accel::Impl::intersect(const Ray& ray, std::uint32_t mask) const {
-  Hit hit;
-  if (wide_only) {  // a prototype's usual case: the kernels directly (a call less)
-    if (simple_mask & mask) wide_only->intersect(ray, hit);
-    attribute(hit.prim, hit.geom);
-    return hit;
-  }
-  if (simple) {  // one layer, no instances: the common scene, without the loop
-    if (simple_mask & mask) {
-      if (simple_triangles) simple_triangles->intersect(ray, hit);
-      if (simple_polygons) simple_polygons->intersect(ray, hit);
-    }
-    attribute(hit.prim, hit.geom);
-    return hit;
-  }
-  for (const Layer& l : layers) {
-    if (!(l.mask & mask)) continue;
-    if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
-    if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
-  }
-  attribute(hit.prim, hit.geom);
-  if (has_instances) intersect_instances(ray, mask, hit);
-  return hit;
-}
-
-bool Accel::Impl::occluded(const Ray& ray, std::uint32_t mask) const {
-  if (wide_only) return (simple_mask & mask) && wide_only->occluded(ray);
-  if (simple)
-    return (simple_mask & mask) && ((simple_triangles && simple_triangles->occluded(ray)) ||
-                                    (simple_polygons && simple_polygons->occluded(ray)));
-  for (const Layer& l : layers) {
-    if (!(l.mask & mask)) continue;
-    if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
-      return true;
-  }
-  return has_instances && occluded_instances(ray, mask);
-}
 
 template <int K>
 void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
@@ -105,14 +68,7 @@ template <int K>
 void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
   const std::uint32_t active = rays.active & lane_bits(K);
   if constexpr (K == 16) {
-    // A full packet of a triangles-only scene: straight to the wide kernels, as single rays.
-    if (!masks && wide_only && all_lanes_active(rays)) return wide_only->intersect(rays, hits);
-    if (!masks && layers.size() == 1 && all_lanes_active(rays)) {
-      const Layer& l = layers[0];
-      if (l.triangle_engine) l.triangle_engine->intersect(rays, hits);
-      if (l.polygon_engine) l.polygon_engine->intersect(rays, hits);
-      return;
-    }
+    if (!masks && all_lanes_active(rays)) return queries.intersect_full(*this, rays, hits);
   }
   HitPacket<16> h;
   reset(h);
@@ -135,16 +91,9 @@ void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, con
 }
 
 template <int K>
-std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const {
-  auto trace = [](const Layer& l, const RayPacket<16>& p) {
-    std::uint32_t blocked = l.triangle_engine ? l.triangle_engine->occluded(p, p.active) : 0u;
-    if (l.polygon_engine && (p.active & ~blocked) != 0) blocked |= l.polygon_engine->occluded(p, p.active & ~blocked);
-    return blocked & p.active;
-  };
-  if constexpr (K == 16) {
-    if (!masks && wide_only && all_lanes_active(rays)) return wide_only->occluded(rays);
-    if (!masks && simple && all_lanes_active(rays)) return trace(layers[0], rays);
-  }
+std::uint32_t Accel::Impl::occluded_by_layers(const RayPacket<K>& rays, const std::uint32_t* masks) const {
+  if constexpr (K == 16)
+    if (!masks && all_lanes_active(rays)) return queries.occluded_full(*this, rays);
   const std::uint32_t active = rays.active & lane_bits(K);
   std::uint32_t blocked = 0;
   RayPacket<16> p;
@@ -152,11 +101,20 @@ std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_
     const std::uint32_t lanes = lanes_of(active, masks, l.mask) & ~blocked;
     if (lanes == 0) continue;
     accel::widen(rays, lanes, p);
-    blocked |= trace(l, p);
+    if (l.triangle_engine) blocked |= l.triangle_engine->occluded(p, lanes) & lanes;
+    if (l.polygon_engine && (lanes & ~blocked) != 0) blocked |= l.polygon_engine->occluded(p, lanes & ~blocked) & lanes;
   }
+  return blocked;
+}
+
+template <int K>
+std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const {
+  const std::uint32_t active = rays.active & lane_bits(K);
+  std::uint32_t blocked = occluded_by_layers(rays, masks);
   if (!has_instances || (active & ~blocked) == 0) return blocked;
   if constexpr (K == 16) {
     if (isa != Isa::scalar) {  // the instances' top level walked by the packet
+      RayPacket<16> p;
       accel::widen(rays, active & ~blocked, p);
       return blocked | occluded_instances(p, masks);
     }

@@ -39,19 +39,16 @@ void store_lane_bytes(std::uint32_t mask, std::uint8_t* out) {
   }
 }
 
-/// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams go as packets
-/// (Accel::Impl::stream_packets), and one octant, or on AVX-512 and AVX2 any octants where
-/// the walk needs no order (occlusion, every hit): closest-hit runs of mixed octants went
-/// faster ray by ray there too, occlusion runs straddling an axis plane (shadow rays) as
-/// packets (perf/rays.md; on AVX2 since its any-hit walk tests nodes lane by lane, session
-/// 27). Scenes with instances: any octants, since the packet shares the top level's walk
-/// (perf/instances.md).
+/// Whether rays[0 .. n) go as one packet: 16 of them, a scene whose streams may go as
+/// packets, and one octant or a plan that takes mixed octants for this walk (`ordered`:
+/// the closest hit; Accel::Impl::StreamPlan). Closest-hit runs of mixed octants go faster
+/// ray by ray, occlusion runs straddling an axis plane (shadow rays) as packets on AVX-512
+/// and AVX2 (perf/rays.md).
 /// `axes`: mixed_axes of the run, when known (-1: not yet).
-template <class Impl>
-bool as_packet(const Impl& impl, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {
-  return n == 16 && impl.stream_packets &&
-         (impl.has_instances || ((impl.isa == Isa::avx512 || impl.isa == Isa::avx2) && !ordered) ||
-          (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
+template <class Plan>
+bool as_packet(const Plan& plan, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {
+  return n == 16 && plan.packets && ((ordered ? plan.mixed_closest : plan.mixed_any) ||
+                                     (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
 }
 
 /// The rays of a stream left to the stream walk, copied together (per thread, reused), or
@@ -71,9 +68,9 @@ Leftover& leftover() {
 }
 
 /// The stream policy for one query. Runs of 16 (the last may be shorter) whose directions
-/// spread across two or more axis planes go to the stream walk where the scene allows it
-/// (Accel::Impl::stream_walk) and at least kStreamWalkRays such rays are in the stream:
-/// those whose mask meets the scene's (simple_mask) copied to left.rays, their places to
+/// spread across two or more axis planes go to the stream walk where the scene has it
+/// (Queries::wide) and at least kStreamWalkRays such rays are in the stream: those whose
+/// mask meets the wide BVH's (Queries::wide_mask) copied to left.rays, their places to
 /// left.index, the others answered as misses by skip(i); or, when that is every run and no
 /// masks are given, none copied and left.whole set (bounce rays: the copy was 3-5% of
 /// their time). Every other run as as_packet says: packet(first) traces the run from
@@ -83,7 +80,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
   const auto by_rule = [&](std::size_t first, int axes) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(impl, rays + first, n, ordered, axes))
+    if (as_packet(impl.queries.stream, rays + first, n, ordered, axes))
       packet(first);
     else
       for (std::size_t i = first; i < first + n; ++i) single(i);
@@ -94,7 +91,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   left.rays.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    const int axes = impl.stream_walk ? mixed_axes(rays + first, n) : -1;
+    const int axes = impl.queries.wide ? mixed_axes(rays + first, n) : -1;
     if (axes >= 2)
       left.runs.push_back(first);
     else
@@ -110,7 +107,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   }
   for (std::size_t first : left.runs)
     for (std::size_t i = first; i < std::min(count, first + 16); ++i) {
-      if (masks && !(masks[i] & impl.simple_mask)) {
+      if (masks && !(masks[i] & impl.queries.wide_mask)) {
         skip(i);
         continue;
       }
@@ -137,13 +134,13 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
       [&](std::size_t i) { hits[i] = Hit{}; });
   if (left.whole) {
     std::fill(hits, hits + count, Hit{});
-    wide_only->intersect(rays, count, hits);
+    queries.wide->intersect(rays, count, hits);
     for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
     return;
   }
   if (left.rays.empty()) return;
   left.hits.assign(left.rays.size(), Hit{});
-  wide_only->intersect(left.rays.data(), left.rays.size(), left.hits.data());
+  queries.wide->intersect(left.rays.data(), left.rays.size(), left.hits.data());
   for (std::size_t k = 0; k < left.index.size(); ++k) {
     Hit& h = hits[left.index[k]];
     h = left.hits[k];
@@ -155,7 +152,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
   Leftover& left = leftover();
   // Double packets (AVX2, one wide BVH, no masks): two neighbouring runs of 16 walked as one
   // packet of 32, the first run held back until its neighbour comes or not.
-  const bool pair = wide_only && !masks && wide_only->double_packets();
+  const bool pair = queries.wide && !masks && queries.wide->double_packets();
   constexpr std::size_t kNone = ~std::size_t{0};
   std::size_t held = kNone;
   const auto single_run = [&](std::size_t first) {
@@ -178,7 +175,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
         }
         RayPacket<32> p;
         volley::load(p, rays + held, 32);
-        const std::uint32_t hit = wide_only->occluded(p);
+        const std::uint32_t hit = queries.wide->occluded(p);
         store_lane_bytes(hit & 0xffffu, blocked + held);
         store_lane_bytes(hit >> 16, blocked + first);
         held = kNone;
@@ -187,12 +184,12 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
       [&](std::size_t i) { blocked[i] = 0; });
   if (held != kNone) single_run(held);
   if (left.whole) {
-    wide_only->occluded(rays, count, blocked);
+    queries.wide->occluded(rays, count, blocked);
     return;
   }
   if (left.rays.empty()) return;
   left.blocked.resize(left.rays.size());
-  wide_only->occluded(left.rays.data(), left.rays.size(), left.blocked.data());
+  queries.wide->occluded(left.rays.data(), left.rays.size(), left.blocked.data());
   for (std::size_t k = 0; k < left.index.size(); ++k) blocked[left.index[k]] = left.blocked[k];
 }
 
@@ -200,7 +197,7 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     std::vector<Hit>* lanes = out + first;
-    if (has_instances || !as_packet(*this, rays + first, n, false)) {
+    if (!queries.stream.every_hit_packets || !as_packet(queries.stream, rays + first, n, false)) {
       for (std::size_t i = 0; i < n; ++i) all_hits(rays[first + i], kMaskAll, lanes[i]);
       continue;
     }

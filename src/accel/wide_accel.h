@@ -117,10 +117,10 @@ class WideAccel {
   /// std::invalid_argument for the plane test (its blocks keep no vertices).
   virtual void closest_point(core::PointQuery& query) const = 0;
 
- protected:
-  /// The single-ray entries of the kernels (WideKernels::intersect_erased, occluded_erased
+ /// The single-ray entries of the kernels (WideKernels::intersect_erased, occluded_erased
   /// and their excluding forms) and the view of the built BVH they take; set by the
-  /// implementation.
+  /// implementation. A scene that is this BVH alone calls them without a call between
+  /// (Accel::Impl::Queries).
   struct SingleRay {
     void (*intersect)(const void* bvh, const Ray& ray, Hit& hit);
     bool (*occluded)(const void* bvh, const Ray& ray);
@@ -128,6 +128,9 @@ class WideAccel {
     bool (*occluded_excluding)(const void* bvh, const Ray& ray, std::uint32_t excluded);
     const void* bvh;
   };
+  const SingleRay& single_ray() const { return single_; }
+
+ protected:
   explicit WideAccel(SingleRay single) : single_(single) {}
   SingleRay single_;
 };

@@ -1,0 +1,173 @@
+// The committed scene's entry points (Accel::Impl::Queries): the layer walk, which answers
+// any scene, and the direct forms of a scene that is one wide BVH of triangles, chosen once
+// at commit. This file is the only place that asks what a scene holds to pick a query's way.
+#include <algorithm>
+
+#include "accel/accel_impl.h"
+
+namespace volley {
+
+/// The layers a ray's mask selects, one by one: triangles, then polygons bounded by their
+/// hit; the answer attributed, then the instances bounded by it.
+struct Accel::Impl::LayerWalk {
+  /// The engines' closest hit (prim an internal id) over the layers `mask` selects.
+  static void engines_hit(const Impl& s, const Ray& ray, std::uint32_t mask, Hit& hit) {
+    for (const Layer& l : s.layers) {
+      if (!(l.mask & mask)) continue;
+      if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
+      if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+    }
+  }
+
+  static Hit intersect(const Impl& s, const Ray& ray, std::uint32_t mask) {
+    Hit hit;
+    engines_hit(s, ray, mask, hit);
+    s.attribute(hit.prim, hit.geom);
+    if (s.has_instances) s.intersect_instances(ray, mask, hit);
+    return hit;
+  }
+
+  /// An instance's hit replaces the engines' one complete (inst set); theirs stays unattributed.
+  static void intersect_unmasked(const void* target, const Ray& ray, Hit& hit) {
+    const Impl& s = *static_cast<const Impl*>(target);
+    engines_hit(s, ray, kMaskAll, hit);
+    Hit nearer = hit;
+    if (s.has_instances && s.intersect_instances(ray, kMaskAll, nearer)) hit = nearer;
+  }
+
+  static bool occluded_unmasked(const void* target, const Ray& ray) {
+    return occluded(*static_cast<const Impl*>(target), ray, kMaskAll);
+  }
+
+  static bool occluded(const Impl& s, const Ray& ray, std::uint32_t mask) {
+    for (const Layer& l : s.layers) {
+      if (!(l.mask & mask)) continue;
+      if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
+        return true;
+    }
+    return s.has_instances && s.occluded_instances(ray, mask);
+  }
+
+  static Hit intersect_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id,
+                                 const Hit& excluded) {
+    Hit hit;
+    for (const Layer& l : s.layers) {
+      if (!(l.mask & mask)) continue;
+      if (l.triangle_engine) l.triangle_engine->intersect_excluding(ray, id, hit);
+      if (l.polygon_engine) l.polygon_engine->intersect_excluding(ray, id, hit);
+    }
+    s.attribute(hit.prim, hit.geom);
+    if (s.has_instances) s.intersect_instances(ray, mask, hit, &excluded);
+    return hit;
+  }
+
+  static bool occluded_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id,
+                                 const Hit& excluded) {
+    for (const Layer& l : s.layers) {
+      if (!(l.mask & mask)) continue;
+      if ((l.triangle_engine && l.triangle_engine->occluded_excluding(ray, id)) ||
+          (l.polygon_engine && l.polygon_engine->occluded_excluding(ray, id)))
+        return true;
+    }
+    return s.has_instances && s.occluded_instances(ray, mask, &excluded);
+  }
+
+  /// A full packet without masks sees every layer (no layer's mask is 0): the caller's
+  /// packet goes to each engine as it is. Instances are the caller's (Impl::intersect).
+  static void intersect_full(const Impl& s, const RayPacket<16>& rays, HitPacket<16>& hits) {
+    for (const Layer& l : s.layers) {
+      if (l.triangle_engine) l.triangle_engine->intersect(rays, hits);
+      if (l.polygon_engine) l.polygon_engine->intersect(rays, hits);
+    }
+  }
+
+  static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) {
+    std::uint32_t blocked = 0;
+    for (const Layer& l : s.layers) {
+      if (l.triangle_engine && (rays.active & ~blocked) != 0)
+        blocked |= l.triangle_engine->occluded(rays, rays.active & ~blocked);
+      if (l.polygon_engine && (rays.active & ~blocked) != 0)
+        blocked |= l.polygon_engine->occluded(rays, rays.active & ~blocked);
+    }
+    return blocked & rays.active;
+  }
+};
+
+/// One wide BVH of triangles and nothing else (a prototype's usual case): the kernels
+/// directly, a layer of calls less per ray.
+struct Accel::Impl::WideDirect {
+  static Hit intersect(const Impl& s, const Ray& ray, std::uint32_t mask) {
+    Hit hit;
+    if (s.queries.wide_mask & mask) s.queries.wide->intersect(ray, hit);
+    s.attribute(hit.prim, hit.geom);
+    return hit;
+  }
+
+  static bool occluded(const Impl& s, const Ray& ray, std::uint32_t mask) {
+    return (s.queries.wide_mask & mask) && s.queries.wide->occluded(ray);
+  }
+
+  static Hit intersect_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id, const Hit&) {
+    Hit hit;
+    if (s.queries.wide_mask & mask) s.queries.wide->intersect(ray, id, hit);
+    s.attribute(hit.prim, hit.geom);
+    return hit;
+  }
+
+  static bool occluded_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id, const Hit&) {
+    return (s.queries.wide_mask & mask) && s.queries.wide->occluded(ray, id);
+  }
+
+  static void intersect_full(const Impl& s, const RayPacket<16>& rays, HitPacket<16>& hits) {
+    s.queries.wide->intersect(rays, hits);
+  }
+
+  static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) { return s.queries.wide->occluded(rays); }
+};
+
+namespace {
+
+/// The entry points of one way of answering (LayerWalk or WideDirect) into the table.
+template <class Forms, class Queries>
+void set_forms(Queries& q) {
+  q.intersect = &Forms::intersect;
+  q.occluded = &Forms::occluded;
+  q.intersect_excluding = &Forms::intersect_excluding;
+  q.occluded_excluding = &Forms::occluded_excluding;
+  q.intersect_full = &Forms::intersect_full;
+  q.occluded_full = &Forms::occluded_full;
+}
+
+}  // namespace
+
+Accel::Impl::Impl() { choose_queries(); }
+
+void Accel::Impl::choose_queries() {
+  Queries q;
+  set_forms<LayerWalk>(q);
+  q.intersect_unmasked = &LayerWalk::intersect_unmasked;
+  q.occluded_unmasked = &LayerWalk::occluded_unmasked;
+  q.unmasked_target = this;
+  const bool one_triangle_layer =
+      layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances;
+  q.wide = one_triangle_layer ? layers[0].triangle_engine->wide() : nullptr;
+  if (q.wide) {
+    q.wide_mask = layers[0].mask;
+    set_forms<WideDirect>(q);
+    const accel::WideAccel::SingleRay& kernels = q.wide->single_ray();
+    q.intersect_unmasked = kernels.intersect;
+    q.occluded_unmasked = kernels.occluded;
+    q.unmasked_target = kernels.bvh;
+  }
+  q.stream.packets = !layers.empty() && (!has_instances || isa != Isa::scalar) &&
+                     std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
+                       return l.triangle_engine ? l.triangle_engine->traces_packets()
+                                                : !l.polygon_engine && !l.instances.empty();
+                     });
+  q.stream.mixed_closest = has_instances;
+  q.stream.mixed_any = has_instances || isa == Isa::avx512 || isa == Isa::avx2;
+  q.stream.every_hit_packets = q.stream.packets && !has_instances;
+  queries = q;
+}
+
+}  // namespace volley
