@@ -35,7 +35,7 @@ std::uint32_t Accel::add_triangles(const float* xyz, std::size_t vertex_count,
                 std::to_string(kInvalidPrim - 1) + " primitives an Accel holds (it has " +
                 std::to_string(impl_->next_id) + ")");
   impl_->unpack();
-  const std::uint32_t geometry = impl_->new_geometry(static_cast<std::uint32_t>(triangle_count), false);
+  const std::uint32_t geometry = impl_->new_geometry(static_cast<std::uint32_t>(triangle_count), Impl::Kind::triangles);
   impl_->geometries.back().indices.assign(indices, indices + 3 * triangle_count);
   impl_->geometries.back().vertex_count = vertex_count;
   auto& tris = impl_->triangles;
@@ -62,7 +62,7 @@ std::uint32_t Accel::add_polygon(const float* xyz, std::size_t vertex_count) {
   } catch (const std::invalid_argument& e) {
     throw Error(std::string("add_polygon: ") + e.what());
   }
-  const std::uint32_t geometry = impl_->new_geometry(1, true);
+  const std::uint32_t geometry = impl_->new_geometry(1, Impl::Kind::polygon);
   impl_->polygons.push_back(std::move(polygon));
   impl_->polygon_ids.push_back(impl_->next_id++);
   return geometry;
@@ -91,9 +91,9 @@ void Accel::set_geometry_mask(std::uint32_t geometry, std::uint32_t mask) {
 
 void Accel::update_vertices(std::uint32_t geometry, const float* xyz, std::size_t vertex_count) {
   Impl::Geometry& g = impl_->geometry_at("update_vertices", geometry);
-  if (g.polygon || g.instance)
+  if (g.kind != Impl::Kind::triangles)
     throw Error("update_vertices: geometry " + std::to_string(geometry) + " is " +
-                (g.polygon ? "a polygon" : "an instance") + ", not triangles");
+                (g.kind == Impl::Kind::polygon ? "a polygon" : "an instance") + ", not triangles");
   if (vertex_count != g.vertex_count)
     throw Error("update_vertices: geometry " + std::to_string(geometry) + " was added with " +
                 std::to_string(g.vertex_count) + " vertices, got " + std::to_string(vertex_count) +

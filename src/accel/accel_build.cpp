@@ -23,9 +23,11 @@ core::BBox triangle_box(const glm::vec3* p) {
 
 }  // namespace
 
-std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, bool polygon) {
+std::uint32_t Accel::Impl::new_geometry(std::uint32_t count, Kind kind) {
   if (geometries.size() >= kInvalidId) throw Error("add: the Accel holds the most geometries it can");
-  geometries.push_back({next_id, count, polygon ? polygon_ids.size() : triangle_ids.size(), polygon, true, {}, 0, false});
+  const std::size_t index = kind == Kind::polygon ? polygon_ids.size() : kind == Kind::instance ? instances.size()
+                                                                                                : triangle_ids.size();
+  geometries.push_back({next_id, count, index, kind, true, {}, 0, false});
   committed = false;
   topology_changed = true;
   return static_cast<std::uint32_t>(geometries.size() - 1);
@@ -68,7 +70,7 @@ std::vector<std::uint32_t> Accel::Impl::layer_masks() const {
 void Accel::Impl::exclude_others(Layer& layer) const {
   layer.excluded = excluded_flat;
   for (const Geometry& g : geometries)
-    if (!g.polygon && (!g.enabled || g.mask != layer.mask))
+    if (g.kind != Kind::polygon && (!g.enabled || g.mask != layer.mask))
       std::fill_n(layer.excluded.begin() + static_cast<std::ptrdiff_t>(g.index), g.count, 1);
 }
 
@@ -98,53 +100,59 @@ void Accel::Impl::build() {
   for (const std::uint32_t mask : layer_masks()) {
     Layer& layer = layers.emplace_back();
     layer.mask = mask;
-    const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
-      return g.enabled && !g.polygon && !g.instance && g.mask == mask;
-    });
-    if (has_triangles) {
-      exclude_others(layer);
-      // Triangles outside the layer and degenerate ones keep an empty box: no node holds them.
-      simd::AlignedVector<core::BBox> boxes(n);  // huge pages: 24 MB for a million triangles
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i)
-          if (!layer.excluded[i]) boxes[i] = triangle_box(&triangles[3 * i]);
-      });
-      layer.triangle_engine = isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
-                              : reference_double ? accel::make_reference_engine(test)
-                                                 : accel::make_oracle_engine(test, robust);
-      core::Bvh bvh = quality == BuildQuality::high
-                          ? core::build_bvh_spatial(boxes, triangles.data(), layer.triangle_engine->bvh_options())
-                          : core::build_bvh(boxes, layer.triangle_engine->bvh_options());
-      // Reported with unit costs (AccelInfo: node visit = 1, triangle test = 1).
-      layer.triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
-      layer.triangle_engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, layer.excluded.data()});
-      layer.built_sah = layer.sah_now = layer.triangle_engine->sah_cost();
-    }
-    build_polygons(layer);
+    build_layer(layer);
   }
   finish_build();
 }
 
+void Accel::Impl::build_layer(Layer& layer) {
+  build_triangles(layer);
+  build_polygons(layer);
+}
+
+void Accel::Impl::build_triangles(Layer& layer) {
+  const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
+    return g.enabled && g.kind == Kind::triangles && g.mask == layer.mask;
+  });
+  if (!has_triangles) return;
+  const std::size_t n = triangle_ids.size();
+  exclude_others(layer);
+  // Triangles outside the layer and degenerate ones keep an empty box: no node holds them.
+  simd::AlignedVector<core::BBox> boxes(n);  // huge pages: 24 MB for a million triangles
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      if (!layer.excluded[i]) boxes[i] = triangle_box(&triangles[3 * i]);
+  });
+  accel::TriangleEngine* engine = layer.triangle_engine =
+      layer.add(isa != Isa::scalar  ? accel::make_wide_engine(test, isa, robust)
+                : reference_double ? accel::make_reference_engine(test)
+                                   : accel::make_oracle_engine(test, robust));
+  core::Bvh bvh = quality == BuildQuality::high ? core::build_bvh_spatial(boxes, triangles.data(), engine->bvh_options())
+                                                : core::build_bvh(boxes, engine->bvh_options());
+  // Reported with unit costs (AccelInfo: node visit = 1, triangle test = 1).
+  layer.triangle_stats = core::bvh_stats(bvh, core::BvhBuildOptions{});
+  engine->build(std::move(bvh), {triangles.data(), triangle_ids.data(), n, layer.excluded.data()});
+  layer.built_sah = layer.sah_now = engine->sah_cost();
+}
+
 void Accel::Impl::build_polygons(Layer& layer) {
-  layer.polygon_engine.reset();
-  layer.polygons.clear();
-  layer.polygon_ids.clear();
+  std::vector<core::Polygon> held;
+  std::vector<std::uint32_t> ids;
   for (const Geometry& g : geometries)
-    if (g.enabled && g.polygon && g.mask == layer.mask) {
-      layer.polygons.push_back(polygons[g.index]);
-      layer.polygon_ids.push_back(polygon_ids[g.index]);
+    if (g.enabled && g.kind == Kind::polygon && g.mask == layer.mask) {
+      held.push_back(polygons[g.index]);
+      ids.push_back(polygon_ids[g.index]);
     }
-  if (!layer.polygons.empty())
-    layer.polygon_engine = accel::make_polygon_engine(layer.polygons, layer.polygon_ids, robust);
+  if (!held.empty()) layer.add(accel::make_polygon_engine(std::move(held), std::move(ids), robust));
 }
 
 void Accel::Impl::finish_build() {
   build_instances();
   compute_bound_parts();
-  one_geometry = geometries.size() == 1 && !geometries[0].instance;
+  one_geometry = geometries.size() == 1 && geometries[0].kind != Kind::instance;
   id_starts.clear();
   for (std::size_t g = 0; g < geometries.size(); ++g)
-    if (!geometries[g].instance && geometries[g].count != 0)
+    if (geometries[g].kind != Kind::instance && geometries[g].count != 0)
       id_starts.emplace_back(geometries[g].first, static_cast<std::uint32_t>(g));
   choose_queries();
   topology_changed = vertices_changed = refitted = false;
@@ -224,11 +232,9 @@ AccelInfo Accel::Impl::info() const {
   for (const Layer& l : layers) {
     AccelInfo part = info;
     part.nodes = part.leaves = part.depth = part.bytes = part.blocks = part.references = 0;
-    if (l.triangle_engine && l.triangle_stats.nodes != 0) {
-      part.binary_sah_cost = l.triangle_stats.sah_cost;
-      l.triangle_engine->describe(part);
-    }
-    if (l.polygon_engine) l.polygon_engine->describe(part);
+    if (l.triangle_stats.nodes != 0) part.binary_sah_cost = l.triangle_stats.sah_cost;
+    for (const auto& engine : l.engines)
+      if (engine.get() != l.triangle_engine || l.triangle_stats.nodes != 0) engine->describe(part);
     const std::size_t nodes = info.nodes + part.nodes, leaves = info.leaves + part.leaves,
                       bytes = info.bytes + part.bytes, blocks = info.blocks + part.blocks,
                       references = info.references + part.references;

@@ -40,11 +40,12 @@ void drop_repeated_hits(std::vector<Hit>& hits, std::size_t first) {
 void Accel::Impl::all_hits(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const {
   for (const Layer& l : layers) {
     if (!(l.mask & mask)) continue;
-    const std::size_t first = out.size();
-    if (l.triangle_engine) l.triangle_engine->all_hits(ray, out);
-    if (quality == BuildQuality::high) drop_repeated_hits(out, first);
-    if (l.polygon_engine) l.polygon_engine->all_hits(ray, out);
-    for (std::size_t i = first; i < out.size(); ++i) attribute(out[i].prim, out[i].geom);
+    for (const auto& engine : l.engines) {
+      const std::size_t first = out.size();
+      engine->all_hits(ray, out);
+      if (quality == BuildQuality::high) drop_repeated_hits(out, first);
+      for (std::size_t i = first; i < out.size(); ++i) attribute(out[i].prim, out[i].geom);
+    }
   }
   if (has_instances) all_hits_instances(ray, mask, out);
 }

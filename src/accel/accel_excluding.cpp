@@ -14,7 +14,7 @@ std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) 
   if (excluded.prim == kInvalidPrim) return kInvalidPrim;  // a miss excludes nothing
   if (excluded.inst == kInvalidId && excluded.geom < geometries.size()) {  // the common case, once per ray
     const Geometry& g = geometries[excluded.geom];
-    if (!g.instance && excluded.prim < g.count) return g.first + excluded.prim;
+    if (g.kind != Kind::instance && excluded.prim < g.count) return g.first + excluded.prim;
   }
   return excluded_elsewhere(caller, excluded);
 }
@@ -22,14 +22,14 @@ std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) 
 std::uint32_t Accel::Impl::excluded_elsewhere(const char* caller, const Hit& excluded) const {
   const auto where = [caller] { return std::string(caller) + ": the excluded hit's "; };
   if (excluded.inst != kInvalidId) {
-    if (excluded.inst >= geometries.size() || !geometries[excluded.inst].instance)
+    if (excluded.inst >= geometries.size() || geometries[excluded.inst].kind != Kind::instance)
       throw Error(where() + "inst " + std::to_string(excluded.inst) + " is not an instance of this scene");
     Hit inner = excluded;
     inner.inst = kInvalidId;
     instances[geometries[excluded.inst].index].prototype->excluded_id(caller, inner);
     return kInvalidPrim;  // not one of this scene's own primitives
   }
-  if (excluded.geom >= geometries.size() || geometries[excluded.geom].instance)
+  if (excluded.geom >= geometries.size() || geometries[excluded.geom].kind == Kind::instance)
     throw Error(where() + "geom " + std::to_string(excluded.geom) + " is not a triangle or polygon geometry of this " +
                 "scene (" + std::to_string(geometries.size()) + " geometry ids)");
   const Geometry& g = geometries[excluded.geom];

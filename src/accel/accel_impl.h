@@ -1,8 +1,9 @@
 // Accel's private state: the geometry as added, and at commit its layers: one per distinct
 // geometry mask (Accel::set_geometry_mask; a scene that sets none has one), each with one
-// triangle engine (the wide SIMD BVH, the scalar oracle or the double reference: engine.h)
-// and one polygon engine, each only when the layer has that kind. A ray walks the layers
-// whose mask shares a bit with its own: triangles, then polygons bounded by their hit.
+// engine per kind of primitive it holds (triangles: the wide SIMD BVH, the scalar oracle or
+// the double reference; polygons: engine.h), and the table of query entry points chosen
+// for the scene (Queries). A ray walks the layers whose mask shares a bit with its own:
+// triangles, then polygons bounded by their hit, then instances.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -44,20 +45,22 @@ inline Ray contains_ray(const float* p) {
 struct Accel::Impl {
   Impl();
 
-  /// One add_triangles / add_polygon call: its primitives have the internal ids first ..
+  /// What a geometry holds; each kind has its engine in a layer (Layer::engines), except
+  /// instances, which the layers walk after their engines.
+  enum class Kind : std::uint8_t { triangles, polygon, instance };
+  /// One add_triangles / add_polygon / add_instance call: its primitives have the internal ids first ..
   /// first + count (the engines answer with those; attribute() turns one back into the
   /// geometry and the index within it).
   struct Geometry {
     std::uint32_t first;  ///< internal id of its first primitive
     std::uint32_t count;  ///< primitives
-    std::size_t index;    ///< its first primitive's place in triangle_ids or polygon_ids
-    bool polygon;
+    std::size_t index;    ///< its first primitive's place in triangle_ids or polygon_ids, or in instances
+    Kind kind;
     bool enabled = true;
     std::vector<std::uint32_t> indices;  ///< triangles: the vertex indices as added (update_vertices)
     std::size_t vertex_count = 0;        ///< triangles: the vertices the add call gave
     bool moved = false;                  ///< update_vertices was called on it (a deforming mesh)
     std::uint32_t mask = kMaskAll;       ///< set_geometry_mask
-    bool instance = false;               ///< an instance (add_instance): `index` is its place in `instances`
     std::size_t packed_vertices = 0;     ///< a loaded triangle geometry's first vertex in Packed::vertices
   };
 
@@ -81,10 +84,19 @@ struct Accel::Impl {
   /// The engines over the enabled geometries of one mask.
   struct Layer {
     std::uint32_t mask = kMaskAll;
-    std::unique_ptr<accel::TriangleEngine> triangle_engine;
-    std::unique_ptr<accel::Engine> polygon_engine;
-    std::vector<core::Polygon> polygons;  ///< what polygon_engine holds
-    std::vector<std::uint32_t> polygon_ids;
+    /// One engine per kind of primitive the layer holds, in query order: triangles, then
+    /// polygons (each answer bounds the next engine's search). The queries loop over them;
+    /// a new kind adds its engine in its builder (build_layer).
+    std::vector<std::unique_ptr<accel::Engine>> engines;
+    /// The triangle engine among them (refit, SAH costs, the saved image), or null.
+    accel::TriangleEngine* triangle_engine = nullptr;
+    /// Appends `engine` after the kinds before it; returns it.
+    template <class E>
+    E* add(std::unique_ptr<E> engine) {
+      E* e = engine.get();
+      engines.push_back(std::move(engine));
+      return e;
+    }
     std::vector<unsigned char> excluded;  ///< per triangle: not in this layer's BVH (another layer's, disabled, degenerate)
     core::BvhStats triangle_stats;        ///< of the binary triangle BVH, as built (unit costs)
     std::vector<InstanceSlot> instances;  ///< the layer's instances
@@ -190,7 +202,7 @@ struct Accel::Impl {
   void choose_queries();
 
   /// Registers the geometry of the next `count` ids and returns its id; uncommits.
-  std::uint32_t new_geometry(std::uint32_t count, bool polygon);
+  std::uint32_t new_geometry(std::uint32_t count, Kind kind);
   /// The geometry with id `geometry`; Error naming `caller` when there is none.
   Geometry& geometry_at(const char* caller, std::uint32_t geometry);
   /// An engine's answer (prim = internal id) as the API reports it: the geometry and the
@@ -224,7 +236,12 @@ struct Accel::Impl {
   std::vector<std::uint32_t> layer_masks() const;
   /// Sets layer.excluded: the triangles not in it (another mask, disabled, degenerate).
   void exclude_others(Layer& layer) const;
-  /// Builds a layer's polygon engine over its enabled polygon geometries (none: no engine).
+  /// Builds a layer's engines, kind after kind (the one list of them): each builder adds its
+  /// engine when the layer holds that kind.
+  void build_layer(Layer& layer);
+  /// The triangle engine over the layer's enabled triangle geometries.
+  void build_triangles(Layer& layer);
+  /// The polygon engine over its enabled polygon geometries.
   void build_polygons(Layer& layer);
   /// Sets one_geometry, the refit state and the queries (choose_queries) after a build or a load.
   void finish_build();

@@ -92,10 +92,7 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   if (!invert(transform, instance.to_object))
     throw Error("add_instance: the transform's 3x3 part is singular (it has no inverse)");
   instance.prototype = proto;
-  const std::uint32_t id = impl_->new_geometry(0, false);
-  Impl::Geometry& g = impl_->geometries.back();
-  g.instance = true;
-  g.index = impl_->instances.size();
+  const std::uint32_t id = impl_->new_geometry(0, Impl::Kind::instance);
   instance.geometry = id;
   impl_->instances.push_back(std::move(instance));
   return id;
@@ -108,7 +105,7 @@ void Accel::Impl::compute_bound_parts() {
   for (const Layer& l : layers) {
     const accel::WideAccel* w = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
     const accel::WideImage image = w ? w->image() : accel::WideImage{};
-    if (!w || l.polygon_engine || !l.instances.empty() || (image.root & simd::wide_ref::kLeafBit)) {
+    if (!w || l.engines.size() != 1 || !l.instances.empty() || (image.root & simd::wide_ref::kLeafBit)) {
       wide = false;
       break;
     }
@@ -138,7 +135,7 @@ void Accel::Impl::build_instances() {
     layer.instances.clear();
     std::vector<core::BBox> boxes;
     for (const Geometry& g : geometries) {
-      if (!g.instance || !g.enabled || g.mask != layer.mask) continue;
+      if (g.kind != Kind::instance || !g.enabled || g.mask != layer.mask) continue;
       const Instance& in = instances[g.index];
       InstanceSlot slot;
       for (int c = 0; c < 4; ++c)

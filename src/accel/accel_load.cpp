@@ -39,7 +39,7 @@ void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Me
     (r.polygon ? polygons : triangles) += r.count;
     disabled += !r.enabled;
     id += r.count;
-    out.push_back({r.first, r.count, static_cast<std::size_t>(r.index), r.polygon != 0, r.enabled != 0, {},
+    out.push_back({r.first, r.count, static_cast<std::size_t>(r.index), r.polygon != 0 ? Kind::polygon : Kind::triangles, r.enabled != 0, {},
                    static_cast<std::size_t>(r.vertex_count), r.moved != 0, r.mask});
     out.back().packed_vertices = static_cast<std::size_t>(vertex_total);
     if (!r.polygon) vertex_total += r.vertex_count;
@@ -68,7 +68,7 @@ void Accel::Impl::read_polygons(accel::file::Reader& in, std::span<const std::ui
                                 std::span<const float> vertices) {
   std::size_t at = 0;
   for (const Geometry& g : geometries) {
-    if (!g.polygon) continue;
+    if (g.kind != Kind::polygon) continue;
     const std::uint32_t n = sizes[polygons.size()];
     if (n > (vertices.size() - at) / 3) in.fail("the polygon outlines run past their chunk");
     std::vector<glm::vec3> outline(n);
@@ -104,7 +104,7 @@ void Accel::Impl::load_from(const std::string& path) {
     for (std::size_t k = 0; k < slab.size();) {
       while (left == 0) {
         if (geometry == geometries.end()) in.fail("more triangle indices than triangles");
-        if (!geometry->polygon && geometry->count != 0) {
+        if (geometry->kind == Kind::triangles && geometry->count != 0) {
           left = 3 * std::uint64_t{geometry->count};
         } else {
           ++geometry;
@@ -126,7 +126,7 @@ void Accel::Impl::load_from(const std::string& path) {
       polygon_sizes.size() != meta.polygons || excluded_flat_in.size() != meta.triangles)
     in.fail("the input chunks' sizes do not match the geometry table");
   for (const Geometry& g : geometries)
-    if (g.polygon) polygon_ids.push_back(g.first);
+    if (g.kind == Kind::polygon) polygon_ids.push_back(g.first);
   next_id = static_cast<std::uint32_t>(meta.next_id);
 
   read_polygons(in, polygon_sizes, polygon_vertices);
@@ -161,7 +161,7 @@ void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
   const file::Header& h = in.header();
   const file::LayerRecord& r = in.one<file::LayerRecord>(file::Tag::layer);
   const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
-    return g.enabled && !g.polygon && g.mask == mask;
+    return g.enabled && g.kind != Kind::polygon && g.mask == mask;
   });
   if (r.mask != mask || r.has_triangles != (has_triangles ? 1u : 0u))
     in.fail("a layer record does not match the geometries' masks");
@@ -208,7 +208,7 @@ void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
   } catch (const std::invalid_argument& e) {
     in.fail(e.what());
   }
-  layer.triangle_engine = accel::make_wide_engine(std::move(wide));
+  layer.triangle_engine = layer.add(accel::make_wide_engine(std::move(wide)));
   layer.triangle_stats = {r.bvh_nodes, r.bvh_leaves, r.bvh_depth, r.bvh_sah_cost, r.bvh_mean_leaf_size, r.bvh_bytes};
 }
 

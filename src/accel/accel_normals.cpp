@@ -45,8 +45,8 @@ inline std::array<float, 3> triangle_normal(const float* p0, const float* p1, co
 std::array<float, 3> Accel::Impl::local_normal(std::uint32_t geom, std::uint32_t prim) const {
   if (geom >= geometries.size()) return {kNaN, kNaN, kNaN};
   const Geometry& g = geometries[geom];
-  if (g.instance || prim >= g.count) return {kNaN, kNaN, kNaN};
-  if (g.polygon) {
+  if (g.kind == Kind::instance || prim >= g.count) return {kNaN, kNaN, kNaN};
+  if (g.kind == Kind::polygon) {
     const core::Polygon& p = polygons[g.index];
     const double n[3] = {p.normal.x, p.normal.y, p.normal.z};
     return unit(n);
@@ -68,7 +68,7 @@ std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
   if (!impl_->committed) throw Error("geometric_normal: call commit() after adding geometry");
   if (!hit.hit()) return {kNaN, kNaN, kNaN};
   if (hit.inst == kInvalidId) return impl_->local_normal(hit.geom, hit.prim);
-  if (hit.inst >= impl_->geometries.size() || !impl_->geometries[hit.inst].instance) return {kNaN, kNaN, kNaN};
+  if (hit.inst >= impl_->geometries.size() || impl_->geometries[hit.inst].kind != Impl::Kind::instance) return {kNaN, kNaN, kNaN};
   const Impl::Instance& in = impl_->instances[impl_->geometries[hit.inst].index];
   const std::array<float, 3> n = in.prototype->local_normal(hit.geom, hit.prim);
   // Normals map by the inverse transpose: world n = A^-T n_object, A^-1 being to_object's 3x3.
@@ -90,7 +90,7 @@ void Accel::geometric_normals(const Hit* hits, std::size_t count, float* xyz, in
         // a miss (most rays of many batches): no call
       } else if (const Impl::Geometry* g = h.inst == kInvalidId && !im.packed && h.geom < im.geometries.size()
                                              ? &im.geometries[h.geom] : nullptr;
-                 g && !g->instance && !g->polygon && h.prim < g->count) {
+                 g && g->kind == Impl::Kind::triangles && h.prim < g->count) {
         // A triangle of this Accel as added (most hits): local_normal without its call.
         const glm::vec3* p = &im.triangles[3 * (g->index + h.prim)];
         n = triangle_normal(&p[0].x, &p[1].x, &p[2].x);

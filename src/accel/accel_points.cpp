@@ -14,10 +14,8 @@ ClosestPoint Accel::Impl::closest_point(core::PointQuery& query) const {
   if (has_instances)
     throw Error("closest_point: scenes with instances are not supported by the point queries (query the prototypes)");
   try {
-    for (const Layer& l : layers) {
-      if (l.triangle_engine) l.triangle_engine->closest_point(query);
-      if (l.polygon_engine) l.polygon_engine->closest_point(query);
-    }
+    for (const Layer& l : layers)
+      for (const auto& engine : l.engines) engine->closest_point(query);
   } catch (const std::invalid_argument& e) {  // the wide plane-test engine
     throw Error(std::string("closest_point: ") + e.what() + "; commit with the watertight (default) or Moller test");
   }

@@ -81,8 +81,7 @@ void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, con
     const std::uint32_t lanes = lanes_of(active, masks, l.mask);
     if (lanes == 0) continue;
     accel::widen(rays, lanes, p);
-    if (l.triangle_engine) l.triangle_engine->intersect(p, h);
-    if (l.polygon_engine) l.polygon_engine->intersect(p, h);
+    for (const auto& engine : l.engines) engine->intersect(p, h);
   }
   for (std::uint32_t b = active; b != 0; b &= b - 1) {
     const int i = __builtin_ctz(b);
@@ -101,8 +100,8 @@ std::uint32_t Accel::Impl::occluded_by_layers(const RayPacket<K>& rays, const st
     const std::uint32_t lanes = lanes_of(active, masks, l.mask) & ~blocked;
     if (lanes == 0) continue;
     accel::widen(rays, lanes, p);
-    if (l.triangle_engine) blocked |= l.triangle_engine->occluded(p, lanes) & lanes;
-    if (l.polygon_engine && (lanes & ~blocked) != 0) blocked |= l.polygon_engine->occluded(p, lanes & ~blocked) & lanes;
+    for (const auto& engine : l.engines)
+      if ((lanes & ~blocked) != 0) blocked |= engine->occluded(p, lanes & ~blocked) & lanes;
   }
   return blocked;
 }

@@ -49,8 +49,8 @@ void Accel::Impl::save_to(const std::string& path) const {
   std::vector<std::uint32_t> polygon_sizes;
   std::vector<float> polygon_vertices;
   for (const Geometry& g : geometries) {
-    records.push_back({g.first, g.count, g.index, g.vertex_count, g.polygon, g.enabled, g.moved, g.mask});
-    if (!g.polygon) continue;
+    records.push_back({g.first, g.count, g.index, g.vertex_count, g.kind == Kind::polygon, g.enabled, g.moved, g.mask});
+    if (g.kind != Kind::polygon) continue;
     const std::vector<glm::vec3>& v = polygons[g.index].vertices;
     polygon_sizes.push_back(static_cast<std::uint32_t>(v.size()));
     for (const glm::vec3& p : v) polygon_vertices.insert(polygon_vertices.end(), {p.x, p.y, p.z});
@@ -67,7 +67,7 @@ void Accel::Impl::save_to(const std::string& path) const {
     vertices_out = packed->vertices, indices_out = packed->indices, excluded_flat_out = packed->excluded_flat;
   } else {
     for (const Geometry& g : geometries) {
-      if (g.polygon) continue;
+      if (g.kind == Kind::polygon) continue;
       const std::size_t base = vertices.size();
       vertices.resize(base + 3 * g.vertex_count, 0.0f);
       for (std::size_t k = 0; k < g.indices.size(); ++k)
@@ -114,7 +114,7 @@ void Accel::Impl::unpack() {
   const float* v = p.vertices.data();
   const std::uint32_t* idx = p.indices.data();
   for (Geometry& g : geometries) {
-    if (g.polygon) continue;
+    if (g.kind == Kind::polygon) continue;
     g.indices.assign(idx, idx + 3 * std::size_t{g.count});
     for (std::size_t k = 0; k < g.indices.size(); ++k) {
       const float* x = v + 3 * std::size_t{g.indices[k]};

@@ -1,8 +1,8 @@
 // The engines behind Accel: each answers the queries over one kind of primitive in one
 // way. Triangles have three: the wide SIMD BVH (wide_engine.cpp), the scalar oracle in
 // float (oracle_engine.cpp) and the accuracy reference in double (reference_engine.cpp);
-// polygons one (polygon_engine.cpp). Accel::Impl picks one triangle engine at commit and
-// combines it once with the polygons: triangles first, then polygons bounded by their hit.
+// polygons one (polygon_engine.cpp). At commit Accel::Impl gives each layer one engine per
+// kind it holds (Layer::engines: triangles first, then polygons bounded by their hit).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -55,6 +55,9 @@ class Engine {
   virtual bool traces_packets() const { return false; }
   /// Adds the engine's structure (nodes, leaves, depth, bytes) to `info`.
   virtual void describe(AccelInfo& info) const = 0;
+  /// The wide BVH when this is the SIMD triangle engine: a scene that is this engine alone
+  /// calls its kernels directly (Accel::Impl::Queries).
+  virtual const WideAccel* wide() const { return nullptr; }
 };
 
 /// The triangles of a scene, in prim-id order (borrowed: Accel::Impl keeps them, and adding
@@ -80,9 +83,6 @@ class TriangleEngine : public Engine {
   virtual double refit(const Triangles& triangles, const std::uint32_t* index_of) = 0;
   /// The SAH cost of the structure as it is.
   virtual double sah_cost() const = 0;
-  /// The wide BVH when this is the SIMD engine: Accel's single-ray queries call it directly
-  /// when the scene has nothing else (one call per ray less).
-  virtual const WideAccel* wide() const { return nullptr; }
 };
 
 /// The wide BVH over triangle blocks with the SIMD kernels of `test` on `isa` (resolved, not
@@ -96,8 +96,9 @@ std::unique_ptr<TriangleEngine> make_oracle_engine(TriangleTest test, bool robus
 /// slabs, the triangle test in double on the widened ray.
 std::unique_ptr<TriangleEngine> make_reference_engine(TriangleTest test);
 /// Planar polygons by the even-odd crossing rule, over their own binary BVH.
-std::unique_ptr<Engine> make_polygon_engine(const std::vector<core::Polygon>& polygons,
-                                            const std::vector<std::uint32_t>& ids, bool robust);
+/// It keeps the polygons and their ids.
+std::unique_ptr<Engine> make_polygon_engine(std::vector<core::Polygon> polygons, std::vector<std::uint32_t> ids,
+                                            bool robust);
 
 /// Lane i of a packet as a ray.
 template <int K>

@@ -12,11 +12,11 @@ namespace {
 
 class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
  public:
-  PolygonEngine(const std::vector<core::Polygon>& polygons, const std::vector<std::uint32_t>& ids, bool robust)
-      : ScalarQueries(robust), polygons_(polygons), ids_(ids) {
+  PolygonEngine(std::vector<core::Polygon> polygons, std::vector<std::uint32_t> ids, bool robust)
+      : ScalarQueries(robust), polygons_(std::move(polygons)), ids_(std::move(ids)) {
     std::vector<core::BBox> boxes;
-    boxes.reserve(polygons.size());
-    for (const auto& poly : polygons) {
+    boxes.reserve(polygons_.size());
+    for (const auto& poly : polygons_) {
       core::BBox b;
       for (const auto& v : poly.vertices) b.extend(v);
       boxes.push_back(b);
@@ -61,16 +61,16 @@ class PolygonEngine final : public ScalarQueries<PolygonEngine, Engine> {
   }
 
  private:
-  const std::vector<core::Polygon>& polygons_;  // Accel::Impl's (see Triangles)
-  const std::vector<std::uint32_t>& ids_;
+  std::vector<core::Polygon> polygons_;  // copies of the layer's (a layer may move)
+  std::vector<std::uint32_t> ids_;
   core::Bvh bvh_;
 };
 
 }  // namespace
 
-std::unique_ptr<Engine> make_polygon_engine(const std::vector<core::Polygon>& polygons,
-                                            const std::vector<std::uint32_t>& ids, bool robust) {
-  return std::make_unique<PolygonEngine>(polygons, ids, robust);
+std::unique_ptr<Engine> make_polygon_engine(std::vector<core::Polygon> polygons, std::vector<std::uint32_t> ids,
+                                            bool robust) {
+  return std::make_unique<PolygonEngine>(std::move(polygons), std::move(ids), robust);
 }
 
 }  // namespace volley::accel

@@ -14,8 +14,7 @@ struct Accel::Impl::LayerWalk {
   static void engines_hit(const Impl& s, const Ray& ray, std::uint32_t mask, Hit& hit) {
     for (const Layer& l : s.layers) {
       if (!(l.mask & mask)) continue;
-      if (l.triangle_engine) l.triangle_engine->intersect(ray, hit);
-      if (l.polygon_engine) l.polygon_engine->intersect(ray, hit);
+      for (const auto& engine : l.engines) engine->intersect(ray, hit);
     }
   }
 
@@ -42,8 +41,8 @@ struct Accel::Impl::LayerWalk {
   static bool occluded(const Impl& s, const Ray& ray, std::uint32_t mask) {
     for (const Layer& l : s.layers) {
       if (!(l.mask & mask)) continue;
-      if ((l.triangle_engine && l.triangle_engine->occluded(ray)) || (l.polygon_engine && l.polygon_engine->occluded(ray)))
-        return true;
+      for (const auto& engine : l.engines)
+        if (engine->occluded(ray)) return true;
     }
     return s.has_instances && s.occluded_instances(ray, mask);
   }
@@ -53,8 +52,7 @@ struct Accel::Impl::LayerWalk {
     Hit hit;
     for (const Layer& l : s.layers) {
       if (!(l.mask & mask)) continue;
-      if (l.triangle_engine) l.triangle_engine->intersect_excluding(ray, id, hit);
-      if (l.polygon_engine) l.polygon_engine->intersect_excluding(ray, id, hit);
+      for (const auto& engine : l.engines) engine->intersect_excluding(ray, id, hit);
     }
     s.attribute(hit.prim, hit.geom);
     if (s.has_instances) s.intersect_instances(ray, mask, hit, &excluded);
@@ -65,9 +63,8 @@ struct Accel::Impl::LayerWalk {
                                  const Hit& excluded) {
     for (const Layer& l : s.layers) {
       if (!(l.mask & mask)) continue;
-      if ((l.triangle_engine && l.triangle_engine->occluded_excluding(ray, id)) ||
-          (l.polygon_engine && l.polygon_engine->occluded_excluding(ray, id)))
-        return true;
+      for (const auto& engine : l.engines)
+        if (engine->occluded_excluding(ray, id)) return true;
     }
     return s.has_instances && s.occluded_instances(ray, mask, &excluded);
   }
@@ -75,20 +72,15 @@ struct Accel::Impl::LayerWalk {
   /// A full packet without masks sees every layer (no layer's mask is 0): the caller's
   /// packet goes to each engine as it is. Instances are the caller's (Impl::intersect).
   static void intersect_full(const Impl& s, const RayPacket<16>& rays, HitPacket<16>& hits) {
-    for (const Layer& l : s.layers) {
-      if (l.triangle_engine) l.triangle_engine->intersect(rays, hits);
-      if (l.polygon_engine) l.polygon_engine->intersect(rays, hits);
-    }
+    for (const Layer& l : s.layers)
+      for (const auto& engine : l.engines) engine->intersect(rays, hits);
   }
 
   static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) {
     std::uint32_t blocked = 0;
-    for (const Layer& l : s.layers) {
-      if (l.triangle_engine && (rays.active & ~blocked) != 0)
-        blocked |= l.triangle_engine->occluded(rays, rays.active & ~blocked);
-      if (l.polygon_engine && (rays.active & ~blocked) != 0)
-        blocked |= l.polygon_engine->occluded(rays, rays.active & ~blocked);
-    }
+    for (const Layer& l : s.layers)
+      for (const auto& engine : l.engines)
+        if ((rays.active & ~blocked) != 0) blocked |= engine->occluded(rays, rays.active & ~blocked);
     return blocked & rays.active;
   }
 };
@@ -148,9 +140,8 @@ void Accel::Impl::choose_queries() {
   q.intersect_unmasked = &LayerWalk::intersect_unmasked;
   q.occluded_unmasked = &LayerWalk::occluded_unmasked;
   q.unmasked_target = this;
-  const bool one_triangle_layer =
-      layers.size() == 1 && layers[0].triangle_engine && !layers[0].polygon_engine && !has_instances;
-  q.wide = one_triangle_layer ? layers[0].triangle_engine->wide() : nullptr;
+  const bool one_engine = layers.size() == 1 && layers[0].engines.size() == 1 && !has_instances;
+  q.wide = one_engine ? layers[0].engines[0]->wide() : nullptr;
   if (q.wide) {
     q.wide_mask = layers[0].mask;
     set_forms<WideDirect>(q);
@@ -161,8 +152,9 @@ void Accel::Impl::choose_queries() {
   }
   q.stream.packets = !layers.empty() && (!has_instances || isa != Isa::scalar) &&
                      std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
-                       return l.triangle_engine ? l.triangle_engine->traces_packets()
-                                                : !l.polygon_engine && !l.instances.empty();
+                       return l.engines.empty() ? !l.instances.empty()
+                                                : std::any_of(l.engines.begin(), l.engines.end(),
+                                                              [](const auto& e) { return e->traces_packets(); });
                      });
   q.stream.mixed_closest = has_instances;
   q.stream.mixed_any = has_instances || isa == Isa::avx512 || isa == Isa::avx2;

@@ -205,15 +205,16 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
     volley::load(p, rays + first, 16);
     std::size_t before[16];
     for (int i = 0; i < 16; ++i) before[i] = lanes[i].size();
-    for (const Layer& l : layers) {
-      for (int i = 0; i < 16; ++i) before[i] = lanes[i].size();
-      if (l.triangle_engine) l.triangle_engine->all_hits(p, lanes);
-      if (quality == BuildQuality::high)
-        for (int i = 0; i < 16; ++i) drop_repeated_hits(lanes[i], before[i]);
-      if (l.polygon_engine) l.polygon_engine->all_hits(p, lanes);
-      for (int i = 0; i < 16; ++i)
-        for (std::size_t k = before[i]; k < lanes[i].size(); ++k) attribute(lanes[i][k].prim, lanes[i][k].geom);
-    }
+    for (const Layer& l : layers)
+      for (const auto& engine : l.engines) {
+        engine->all_hits(p, lanes);
+        if (quality == BuildQuality::high)
+          for (int i = 0; i < 16; ++i) drop_repeated_hits(lanes[i], before[i]);
+        for (int i = 0; i < 16; ++i) {
+          for (std::size_t k = before[i]; k < lanes[i].size(); ++k) attribute(lanes[i][k].prim, lanes[i][k].geom);
+          before[i] = lanes[i].size();
+        }
+      }
   }
 }
 

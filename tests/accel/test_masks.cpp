@@ -197,3 +197,23 @@ TEST_CASE("masks: bad calls") {
   accel.set_geometry_mask(0, 1);
   CHECK_THROWS_WITH_AS(accel.intersect(r, 1), doctest::Contains("commit"), volley::Error);
 }
+
+TEST_CASE("masks: polygons in the first of several layers are hit after the later layers are built") {
+  // Layers are built in descending mask order; the polygons' layer comes first here, and the
+  // two after it grow the list of layers (the polygon engine keeps its own polygons).
+  Accel accel;
+  const float square[] = {-1, -1, 2, 1, -1, 2, 1, 1, 2, -1, 1, 2};
+  accel.add_polygon(square, 4);
+  accel.set_geometry_mask(0, 0x4);
+  const float tri[] = {-1, -1, 1, 1, -1, 1, 0, 1, 1};
+  const std::uint32_t idx[] = {0, 1, 2};
+  for (std::uint32_t mask : {0x2u, 0x1u}) accel.set_geometry_mask(accel.add_triangles(tri, 3, idx, 1), mask);
+  accel.commit();
+  CHECK(accel.info().layers == 3);
+  const Ray down{{0.1f, 0.1f, 5}, 0, {0, 0, -1}, 10};
+  const Hit polygon = accel.intersect(down, 0x4);
+  CHECK(polygon.geom == 0);
+  CHECK(polygon.t == doctest::Approx(3.0f));
+  CHECK(accel.intersect(down).geom == 0);  // the polygon is nearer than the triangles
+  CHECK(accel.intersect(down, 0x3).t == doctest::Approx(4.0f));
+}
