@@ -13,7 +13,7 @@
 #include <stdexcept>
 
 #include "io/scene_loader.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley::bench {
 

@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <string>
 
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace {
 

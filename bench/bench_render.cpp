@@ -1,4 +1,4 @@
-// Rays per second of whole renders (src/render): tiles, shading, secondary rays and
+// Rays per second of whole renders (src/apps/render): tiles, shading, secondary rays and
 // shadow rays together, per scene x ISA x integrator, one thread, 128 x 128 pixels,
 // 1 sample per pixel, the scene's own max_depth and seed, the integrator its file names.
 //

@@ -16,7 +16,7 @@
 #include "bench_common.h"
 #include "render/renderer.h"
 #include "render/scene.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley::bench {
 namespace {

@@ -1,4 +1,4 @@
-// Ray-triangle tests per second of the SIMD kernels (simd/block_kernels.h) and the scalar
+// Ray-triangle tests per second of the SIMD kernels (simd/triangle/block_kernels.h) and the scalar
 // oracle (src/core/triangle_*.h), per test x ISA x form x workload, L1-resident data.
 //
 // A "leaf" is 16 triangles (1 block at AVX-512, 2 at AVX2, 4 at SSE4.2), so every ISA does
@@ -33,13 +33,13 @@
 #include "core/triangle.h"
 #include "simd/testing/prepare_ray.h"
 #include "simd/aligned.h"
-#include "simd/arch.h"
-#include "simd/block_build.h"
-#include "simd/block_kernels.h"
-#include "simd/dispatch.h"
-#include "simd/prepared_packet.h"
-#include "simd/prepared_ray.h"
-#include "simd/ray_packet.h"
+#include "simd/isa/arch.h"
+#include "simd/triangle/block_build.h"
+#include "simd/triangle/block_kernels.h"
+#include "simd/isa/dispatch.h"
+#include "simd/rays/prepared_packet.h"
+#include "simd/rays/prepared_ray.h"
+#include "simd/rays/ray_packet.h"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "simd/prepared_ray.h"
+#include "simd/rays/prepared_ray.h"
 
 namespace volley::simd {
 

@@ -1,7 +1,7 @@
 // AVX-512 kernels that only the tests and benchmarks call (TriangleKernels and the kernel
-// suites; compiled with the flags of simd/isa_avx512.cpp). Explicit instantiations only
+// suites; compiled with the flags of simd/isa/isa_avx512.cpp). Explicit instantiations only
 // (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
-#include "simd/block_kernels.h"
+#include "simd/triangle/block_kernels.h"
 
 namespace volley::simd {
 

@@ -1,7 +1,7 @@
 // prepare_ray: a PreparedRay made by the scalar oracle's own code, for the kernel tests and
 // benchmarks (the library's walks prepare their rays themselves: simd/wide/single_walk.h).
 #pragma once
-#include "simd/prepared_ray.h"
+#include "simd/rays/prepared_ray.h"
 #include "volley/ray.h"
 
 namespace volley::simd {

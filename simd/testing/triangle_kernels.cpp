@@ -6,9 +6,9 @@
 #include <string>
 
 #include "simd/aligned.h"
-#include "simd/block_build.h"
-#include "simd/block_kernels.h"
-#include "simd/dispatch.h"
+#include "simd/triangle/block_build.h"
+#include "simd/triangle/block_kernels.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley::simd {
 namespace {

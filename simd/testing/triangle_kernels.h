@@ -7,10 +7,10 @@
 #include <memory>
 #include <vector>
 
-#include "simd/prepared_packet.h"
-#include "simd/prepared_ray.h"
+#include "simd/rays/prepared_packet.h"
+#include "simd/rays/prepared_ray.h"
 #include "simd/testing/prepare_ray.h"
-#include "simd/ray_packet.h"
+#include "simd/rays/ray_packet.h"
 #include "volley/options.h"
 #include "volley/ray.h"
 

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "simd/wide_bvh.h"
+#include "simd/wide/wide_bvh.h"
 #include "volley/packet.h"
 #include "volley/ray.h"
 

@@ -16,7 +16,7 @@
 //   frustum_walk.h  coherent packets: one interval test per node
 //   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
 //   stream_walk.h   streams: lists of rays split node by node
-// simd/wide_traverse.h includes them all and declares the per-ISA instantiations.
+// simd/wide/wide_traverse.h includes them all and declares the per-ISA instantiations.
 //
 // Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
 // operation for operation: slab distances (plane - org) * (1 / dir) with near and far
@@ -49,17 +49,17 @@
 
 #include "core/kernel_constants.h"
 #include "core/point_triangle.h"
-#include "simd/arch.h"
-#include "simd/block_kernels.h"
+#include "simd/isa/arch.h"
+#include "simd/triangle/block_kernels.h"
 #include "simd/hit_list.h"
-#include "simd/kernel_common.h"
-#include "simd/prepared_packet.h"
-#include "simd/prepared_ray.h"
-#include "simd/ray_packet.h"
-#include "simd/triangle_blocks.h"
+#include "simd/triangle/kernel_common.h"
+#include "simd/rays/prepared_packet.h"
+#include "simd/rays/prepared_ray.h"
+#include "simd/rays/ray_packet.h"
+#include "simd/triangle/triangle_blocks.h"
 #include "simd/wide/instance_view.h"
 #include "simd/wide/query_protocol.h"
-#include "simd/wide_bvh.h"
+#include "simd/wide/wide_bvh.h"
 #include "volley/options.h"
 #include "volley/ray.h"
 

@@ -45,9 +45,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "simd/prepared_packet.h"
-#include "simd/prepared_ray.h"
-#include "simd/wide_bvh.h"
+#include "simd/rays/prepared_packet.h"
+#include "simd/rays/prepared_ray.h"
+#include "simd/wide/wide_bvh.h"
 #include "volley/ray.h"
 
 namespace volley::simd {

@@ -13,7 +13,7 @@
 #include <cstring>
 #include <limits>
 
-#include "simd/ray_transpose.h"
+#include "simd/rays/ray_transpose.h"
 #include "simd/stream_scratch.h"
 #include "simd/wide/compress.h"
 #include "simd/wide/stream_queries.h"

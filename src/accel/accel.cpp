@@ -10,7 +10,7 @@
 
 #include "accel/accel_impl.h"
 #include "accel/parallel.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley {
 

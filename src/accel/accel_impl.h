@@ -20,7 +20,7 @@
 #include "accel/accel_file.h"
 #include "accel/engine.h"
 #include "accel/instance_tree.h"
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "core/bvh.h"
 #include "core/polygon.h"
 #include "volley/accel.h"

@@ -8,9 +8,9 @@
 
 #include "accel/accel_file.h"
 #include "accel/accel_impl.h"
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "core/polygon.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "accel/accel_file.h"
 #include "accel/accel_impl.h"
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 
 namespace volley {
 

@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "core/bvh.h"
-#include "simd/wide_traverse.h"
+#include "simd/wide/wide_traverse.h"
 
 namespace volley::accel {
 

@@ -1,11 +1,11 @@
 // volley::load for packets of 4, 8 and 16 (and the library's double packets of 32) and
 // volley::store for packets of 16 (volley/packet.h): whole packets by the widest ISA's
-// transposes (simd/packet_convert.h), chosen once; partial ones, or any on a CPU without
+// transposes (simd/rays/packet_convert.h), chosen once; partial ones, or any on a CPU without
 // them, lane by lane as the header's templates do.
-#include "accel/wide_accel.h"
-#include "simd/arch.h"
-#include "simd/dispatch.h"
-#include "simd/packet_convert.h"
+#include "accel/wide/wide_accel.h"
+#include "simd/isa/arch.h"
+#include "simd/isa/dispatch.h"
+#include "simd/rays/packet_convert.h"
 #include "volley/packet.h"
 
 namespace volley {

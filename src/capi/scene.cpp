@@ -8,7 +8,7 @@
 #include <string>
 
 #include "capi/guard.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/volley.h"
 
 namespace volley::capi {

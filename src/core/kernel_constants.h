@@ -26,16 +26,16 @@ inline constexpr float kSlabExitPad = 1.0f + 2.0f * rounding_gamma(3);
 static_assert(kSlabExitPad > 1.0f, "the padding must not round away");
 
 /// Relative widening of the lower end of the watertight test's scaled range prefilter
-/// (intersect_watertight, core/triangle_watertight.h; simd/watertight.h).
+/// (intersect_watertight, core/triangle_watertight.h; simd/triangle/watertight.h).
 template <class T>
 inline constexpr T kScaledPad = 2 * std::numeric_limits<T>::epsilon();
 
 /// Factors {lo, hi} such that a ray hits a triangle with tmin <= t < upper whenever its
 /// det-scaled distance (t det, det's sign folded in) lies strictly between fl(lo |det|) and
 /// fl(hi |det|) and the edge and det tests pass: the division-free any-hit decision of the
-/// SIMD kernels (simd/watertight.h, sure_hit; the reasons are given there). Lanes outside
+/// SIMD kernels (simd/triangle/watertight.h, sure_hit; the reasons are given there). Lanes outside
 /// (within ~16 ulps of either end, or not hit) are left to the quotient test.
-/// Always inlined: the single-ray walk (simd/wide_traverse.h) calls it from the per-ISA
+/// Always inlined: the single-ray walk (simd/wide/wide_traverse.h) calls it from the per-ISA
 /// files, which must not emit a copy of their own.
 template <class T>
 [[gnu::always_inline]] constexpr std::pair<T, T> sure_quotient_range(T tmin, T upper) {
@@ -55,7 +55,7 @@ template <class T>
 /// swapped when looking down -z (which keeps the winding, so det's sign is the facing).
 /// A lookup, not branches: for incoherent rays each of those tests is a coin toss to the
 /// branch predictor (1.5 mispredictions per ray), and the single-ray walk
-/// (simd/wide_traverse.h) forms c and n with two vector compares.
+/// (simd/wide/wide_traverse.h) forms c and n with two vector compares.
 inline constexpr std::array<std::uint8_t, 64> kWoopAxes = [] {
   std::array<std::uint8_t, 64> table{};
   for (int i = 0; i < 64; ++i) {

@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "core/bvh.h"
 #include "core/triangle.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 #include "volley/packet.h"
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/triangle.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 
 using volley::Accel;

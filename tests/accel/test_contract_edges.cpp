@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "accel_test_util.h"
-#include "simd/arch.h"
-#include "simd/wide_traverse.h"
+#include "simd/isa/arch.h"
+#include "simd/wide/wide_traverse.h"
 
 using namespace accel_test;
 

@@ -15,7 +15,7 @@
 #include "accel_test_util.h"
 #include "accuracy/closed_meshes.h"
 #include "core/triangle_watertight.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 
 using volley::Accel;

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "accel_test_util.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 
 using volley::Accel;

@@ -12,7 +12,7 @@
 #include "accel_test_util.h"
 #include "accuracy/closed_meshes.h"
 #include "core/point_triangle.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 
 using volley::Accel;

@@ -17,8 +17,8 @@
 
 #include "accel/accel_file.h"
 #include "accel_test_util.h"
-#include "simd/dispatch.h"
-#include "simd/wide_bvh.h"
+#include "simd/isa/dispatch.h"
+#include "simd/wide/wide_bvh.h"
 #include "volley/accel.h"
 
 using volley::Accel;

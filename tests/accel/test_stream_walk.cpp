@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "accel_test_util.h"
 #include "core/bvh.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "simd/stream_scratch.h"
 #include "volley/accel.h"
 

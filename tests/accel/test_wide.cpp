@@ -15,13 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "accel_test_util.h"
 #include "core/bvh.h"
 #include "core/triangle.h"
 #include "io/obj_loader.h"
 #include "io/scene_desc.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 #include "volley/packet.h"
 
@@ -247,7 +247,7 @@ TEST_CASE("wide: AccelInfo describes the wide BVH") {
     CAPTURE(std::string(volley::to_string(isa)));
     const auto info = soup.accel(TriangleTest::watertight, isa).info();
     CHECK(info.width == volley::simd::kWideN);
-    // AVX-512 leaves hold blocks of 8, as AVX2's (simd/arch.h, SingleRayArch).
+    // AVX-512 leaves hold blocks of 8, as AVX2's (simd/isa/arch.h, SingleRayArch).
     CHECK(info.block_width == (isa == Isa::sse42 ? 4 : 8));
     CHECK(info.blocks * std::size_t(info.block_width) >= info.triangles - info.degenerate);
     CHECK(info.leaves > 0);

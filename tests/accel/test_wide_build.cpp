@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "accel/wide_build.h"
+#include "accel/wide/wide_build.h"
 #include "core/bvh.h"
 #include "io/obj_loader.h"
 #include "io/scene_desc.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/accel.h"
 
 namespace {

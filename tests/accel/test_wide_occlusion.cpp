@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/wide_accel.h"
+#include "accel/wide/wide_accel.h"
 #include "accel_test_util.h"
 #include "core/bvh.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 #include "volley/packet.h"
 
 using volley::Hit;

@@ -9,8 +9,8 @@
 
 #include "core/large_alloc.h"
 #include "simd/aligned.h"
-#include "simd/triangle_blocks.h"
-#include "simd/wide_bvh.h"
+#include "simd/triangle/triangle_blocks.h"
+#include "simd/wide/wide_bvh.h"
 
 using volley::core::allocate_large;
 using volley::core::free_large;

@@ -15,7 +15,7 @@
 #include "render/renderer.h"
 #include "render/pipeline.h"
 #include "render/spawn.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 namespace fs = std::filesystem;
 using namespace volley;

@@ -1,4 +1,4 @@
-// The closed-and-opaque analysis (core/closed_surface.h, SceneFeatures::cull_admissible):
+// The closed-and-opaque analysis (render/closed_surface.h, SceneFeatures::cull_admissible):
 // closed meshes of the accuracy suite, an open quad, a flipped face, vertices split at a
 // seam, a polygon cube, and glass (closed but not opaque).
 #include <doctest/doctest.h>
@@ -6,7 +6,7 @@
 #include <string>
 
 #include "accuracy/closed_meshes.h"
-#include "core/closed_surface.h"
+#include "render/closed_surface.h"
 #include "render/pipeline.h"
 #include "render/scene.h"
 

@@ -9,7 +9,7 @@
 #include "io/scene_loader.h"
 #include "render/pipeline.h"
 #include "render/renderer.h"
-#include "simd/dispatch.h"
+#include "simd/isa/dispatch.h"
 
 using namespace volley;
 

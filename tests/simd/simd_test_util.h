@@ -18,12 +18,12 @@
 #include "core/triangle.h"
 #include "simd/testing/prepare_ray.h"
 #include "simd/aligned.h"
-#include "simd/arch.h"
-#include "simd/block_build.h"
-#include "simd/block_kernels.h"
-#include "simd/dispatch.h"
-#include "simd/prepared_ray.h"
-#include "simd/ray_packet.h"
+#include "simd/isa/arch.h"
+#include "simd/triangle/block_build.h"
+#include "simd/triangle/block_kernels.h"
+#include "simd/isa/dispatch.h"
+#include "simd/rays/prepared_ray.h"
+#include "simd/rays/ray_packet.h"
 
 TYPE_TO_STRING(volley::simd::Sse42);
 TYPE_TO_STRING(volley::simd::Avx2);

@@ -1,6 +1,6 @@
 // SoA packets and triangle blocks: AoS conversion, inert padding, alignment, and the
 // block packing (values the oracle computes, NaN padding, degenerate lanes).
-#include "simd/packet_convert.h"
+#include "simd/rays/packet_convert.h"
 #include "simd_test_util.h"
 
 namespace {

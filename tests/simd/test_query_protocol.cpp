@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "simd/wide_traverse.h"
+#include "simd/wide/wide_traverse.h"
 
 namespace volley::simd {
 namespace {

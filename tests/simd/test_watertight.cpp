@@ -6,7 +6,7 @@
 
 #include "core/triangle_watertight.h"
 #include "simd/testing/prepare_ray.h"
-#include "simd/watertight.h"
+#include "simd/triangle/watertight.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // Pins the watertight test's scaled range prefilter (src/core/triangle_watertight.h): the
 // upper end t det <= fl(upper |det|) with no widening, the lower end with tmin widened, and
-// the kernels' division-free any-hit decision (simd/watertight.h, sure_hit). Rays whose
+// the kernels' division-free any-hit decision (simd/triangle/watertight.h, sure_hit). Rays whose
 // quotient t lands exactly on, one ulp below and one ulp above either end of [tmin, tmax),
 // at scales where t det and upper |det| are subnormal, must give exactly the answer of the
 // quotient alone, tmin <= t < tmax: in the oracle, and in every kernel form of every ISA.

@@ -1,5 +1,5 @@
 // Closed meshes of the leak tests (stress items 1, 2, 8): the generators live in
-// src/accuracy/closed_meshes.h, shared with `volley accuracy`.
+// src/apps/accuracy/closed_meshes.h, shared with `volley accuracy`.
 #pragma once
 #include "accuracy/closed_meshes.h"
 #include "stress_util.h"

@@ -1,5 +1,5 @@
 // Shared helpers of the numerical stress suite (docs/accuracy.md, stress catalogue): doctest
-// wrappers around src/accuracy/ (the mesh type, the ISA list, the query modes of the public
+// wrappers around src/apps/accuracy/ (the mesh type, the ISA list, the query modes of the public
 // API, the double-precision ray/triangle reference, shared with `volley accuracy`), the
 // Coverage check of generators, and the VOLLEY_STRESS_LONG switch.
 #pragma once

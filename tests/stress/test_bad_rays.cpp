@@ -246,7 +246,7 @@ TEST_CASE("stress 12/13: origin exactly on a triangle with tmin = 0 (pinned beha
 // the farther one. Cause: the watertight test's scaled range prefilter, t det < tmax |det|,
 // rounds tmax |det| and rejected a triangle 1 ulp nearer than the current hit, so the
 // answer depended on the order triangles were met in. The prefilter is now widened so that
-// only the exact quotient test decides (core/triangle_watertight.h, simd/watertight.h).
+// only the exact quotient test decides (core/triangle_watertight.h, simd/triangle/watertight.h).
 TEST_CASE("stress 13: packets and streams give exactly the single-ray closest hit at shared vertices") {
   const ClosedMesh cube = grid_cube(8);
   std::size_t exact = 0, origins = 0;

@@ -24,7 +24,7 @@
 
 #include "accuracy/cases.h"
 #include "accuracy/error_stats.h"
-#include "simd/watertight_stats.h"
+#include "simd/triangle/watertight_stats.h"
 #include "stress_util.h"
 
 using namespace stress;
@@ -318,7 +318,7 @@ TEST_CASE("stress 6/13/14: grazing rays on skinny triangles agree with a double 
 // triangle, while the wide BVH of this one-triangle mesh was a lone leaf tested with no box,
 // and Moller's ill-conditioned hits can lie far outside the triangle's box (t = 76 for a
 // crossing at t = 0.5 at 1e-3 degrees). A lone leaf now sits in a one-child node whose box
-// is tested (src/accel/wide_build.cpp), so both Accels cull alike.
+// is tested (src/accel/wide/wide_build.cpp), so both Accels cull alike.
 TEST_CASE("stress 13: SIMD Moller-Trumbore gives the oracle's hit/miss on grazing rays") {
   check_grazing(true);
 }
@@ -433,7 +433,7 @@ namespace {
 void t_error(std::initializer_list<float> offsets, std::initializer_list<TriangleTest> tests) {
   constexpr double kMedianBound = 1e-7;
   const int n_rays = long_mode() ? 1000000 : 20000;
-  // The random-triangle sets of the accuracy report (src/accuracy/cases.h): 500 random
+  // The random-triangle sets of the accuracy report (src/apps/accuracy/cases.h): 500 random
   // triangles of size ~0.1..1 in a unit box moved by each offset, rays aimed at their interiors.
   for (const volley::accuracy::Case& set : volley::accuracy::random_triangle_cases(n_rays)) {
     const float offset = float(set.offset);

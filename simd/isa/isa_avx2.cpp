@@ -1,0 +1,18 @@
+// AVX2 + FMA kernels of the library (this file alone, with wide_isa_avx2.cpp, is compiled with
+// -mavx2 -mfma): the packet kernels the wide BVH's packet walks call at their leaves (the
+// single-ray leaf kernels are inlined into the walk). Explicit instantiations only
+// (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
+// The forms only tests use are in simd/testing/isa_avx2.cpp.
+#include "simd/triangle/block_kernels.h"
+#include "simd/rays/packet_convert.h"
+
+namespace volley::simd {
+
+template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
+template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
+template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
+
+// volley::load and volley::store of whole packets (src/accel/packet_convert.cpp dispatches).
+template struct PacketConvert<Avx2>;
+
+}  // namespace volley::simd

@@ -1,0 +1,19 @@
+// AVX-512 kernels of the library (this file alone, with wide_isa_avx512.cpp, is compiled with
+// -mavx512f/dq/bw/vl -mavx2 -mfma): the packet kernels the wide BVH's packet walks call at their leaves (the
+// single-ray leaf kernels are inlined into the walk). Explicit instantiations only
+// (docs/style.md rule 2); check_weak_symbols.sh verifies that every weak symbol is tagged.
+// The forms only tests use are in simd/testing/isa_avx512.cpp.
+#include "simd/triangle/block_kernels.h"
+#include "simd/rays/packet_convert.h"
+
+namespace volley::simd {
+
+// Packets of 16 against the 8-triangle blocks of the AVX-512 wide BVH (arch.h).
+template struct PacketKernels<Avx512, TriangleTest::moller, 16, 8>;
+template struct PacketKernels<Avx512, TriangleTest::plane, 16, 8>;
+template struct PacketKernels<Avx512, TriangleTest::watertight, 16, 8>;
+
+// volley::load and volley::store of whole packets (src/accel/packet_convert.cpp dispatches).
+template struct PacketConvert<Avx512>;
+
+}  // namespace volley::simd
