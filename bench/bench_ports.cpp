@@ -1,5 +1,5 @@
 // What this machine's vector units can issue per cycle: the real ceiling of the triangle
-// kernels (bench_triangle_kernels.cpp, perf/kernels.md). A Möller block test is about 37
+// kernels (bench_triangle_kernels.cpp, perf/reports/kernels.md). A Möller block test is about 37
 // vector operations (20 multiplies and FMAs, 4 adds, 6 compares, 5 logic, 2 mask moves),
 // so its ceiling is 37 over the operations per cycle of the ports they share, not 20 over
 // the FMA rate alone.

@@ -2,10 +2,10 @@
 // pipeline specialised to it and by the general one (every stage), one thread, AVX-512
 // or the best ISA, 128 x 128 pixels, 1 sample per pixel. Run with
 // --benchmark_repetitions=N --benchmark_enable_random_interleaving=true so that the two
-// alternate; the speedup of each scene is general / specialised (perf/specialize.md). Names:
+// alternate; the speedup of each scene is general / specialised (perf/reports/specialize.md). Names:
 // specialize/<scene>/<specialised|general>; items = rays traced (the general pipeline
 // traces the same rays: the two images are identical). The speedup is the ratio of the
-// two rates (perf/specialize.md).
+// two rates (perf/reports/specialize.md).
 #include <benchmark/benchmark.h>
 
 #include <exception>

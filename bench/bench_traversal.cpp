@@ -20,7 +20,7 @@
 // Robust against fast slab tests (Options::robust, issue #5): traversal_slabs/<scene>/<isa>/
 // <form>/primary/<robust|fast>, bunny and conference, AVX2 and AVX-512, the same rays and
 // scene both ways; run with --benchmark_enable_random_interleaving and repetitions so that
-// the two of a pair alternate in one process (perf/robust.md).
+// the two of a pair alternate in one process (perf/reports/robust.md).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

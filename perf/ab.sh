@@ -15,7 +15,7 @@
 # Refuses two byte-identical executables: the CLI's CMake target is `volley_cli` (its
 # output is named `volley`); `cmake --build ... --target volley` builds the library alone
 # and leaves the executable as it was, which once turned a session's A/Bs into
-# measurements of the VM's noise (perf/rays.md, session 27). Environment: REPS (default
+# measurements of the VM's noise (perf/reports/rays.md, session 27). Environment: REPS (default
 # 20), SCENES (default ../shared/scenes), ICOUNT. On a shared VM, six pairs or more:
 # identical binaries there gave medians of pairs from 0.86 to 1.08.
 set -euo pipefail

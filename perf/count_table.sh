@@ -1,6 +1,6 @@
 #!/bin/bash
 # volley's counting (count_intersections, intersect_all) against Embree's filter-function
-# counting on the same rays, one thread: the table of perf/queries.md, as markdown rows.
+# counting on the same rays, one thread: the table of perf/reports/queries.md, as markdown rows.
 # Embree at its best: the faster of build quality medium and high and of rtcIntersect1 and
 # rtcIntersect16; volley at its best of the single-ray and batch forms. Run on a quiet
 # machine. Environment as perf/embree_table.sh: B, R, SCENES, RAYS.

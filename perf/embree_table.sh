@@ -1,5 +1,5 @@
 #!/bin/bash
-# volley against Embree on the same rays, one thread: the table of perf/embree.md, as
+# volley against Embree on the same rays, one thread: the table of perf/reports/embree.md, as
 # markdown rows. Run on a quiet machine. Environment: B (build folder, default
 # build/release), R (repetitions, default 9), SCENES (default ../shared/scenes),
 # RAYS (where the ray files go, default /tmp/volley_embree_rays).

@@ -1,6 +1,6 @@
 #!/bin/bash
 # Multi-core scaling: BVH build, rendering and tracing a ray file at 1, 2, 4, ... threads,
-# as markdown rows for perf/scaling.md. Build threads are set by CPU affinity (taskset: the
+# as markdown rows for perf/reports/scaling.md. Build threads are set by CPU affinity (taskset: the
 # oneTBB builder uses the cores it may run on), render and trace threads by --threads.
 # Each figure is the best of R runs. Environment: B (folder with the volley binary, default
 # build/release), SCENES (default ../shared/scenes), RAYS (ray files, default

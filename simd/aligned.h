@@ -36,7 +36,7 @@ struct AlignedAllocator {
   void deallocate(T* p, std::size_t n) noexcept { core::free_large(p, n * sizeof(T), kAlign, kHugeFrom); }
   /// resize() and the count constructor default-initialise: trivial elements (nodes, triangle
   /// blocks) are left to their writer, which fills them in parallel (a serial zero fill
-  /// showed in build profiles: perf/build.md); types with a
+  /// showed in build profiles: perf/reports/build.md); types with a
   /// constructor (BBox) still run it.
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {

@@ -12,12 +12,12 @@ namespace volley::simd {
 
 /// The stream walk takes a stream this many rays at a time (its lists and ray data then
 /// stay within the L2 cache), and hands a subtree whose list holds fewer than
-/// kStreamSwitchRays rays to the single-ray walk, ray by ray (perf/rays.md: 4096 and 16
+/// kStreamSwitchRays rays to the single-ray walk, ray by ray (perf/reports/rays.md: 4096 and 16
 /// against 1024 to 8192 and 8 to 32).
 inline constexpr std::size_t kStreamBatch = 4096;
 inline constexpr std::uint32_t kStreamSwitchRays = 16;
 /// A closest-hit leaf list of kStreamLeafList rays or more is tested L rays at a time in
-/// lanes while kStreamLeafLanes rays of it are left, the rest ray by ray (perf/rays.md,
+/// lanes while kStreamLeafLanes rays of it are left, the rest ray by ray (perf/reports/rays.md,
 /// "long leaf lists of the stream walk in lanes": shorter lists lost on the bunny's bounce rays).
 inline constexpr std::uint32_t kStreamLeafList = 64;
 inline constexpr std::uint32_t kStreamLeafLanes = 4;

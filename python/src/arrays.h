@@ -33,7 +33,7 @@ void* take_buffer(std::size_t bytes);
 void release_buffer(void* data);
 /// Answers this large go through take_buffer: a program that asks the same query again
 /// writes into pages it already has, instead of pages the kernel must zero and map first
-/// (perf/queries.md: a fifth of cast_rays' time on 1M rays).
+/// (perf/reports/queries.md: a fifth of cast_rays' time on 1M rays).
 inline constexpr std::size_t kReusedBytes = std::size_t{1} << 20;
 
 /// Scratch memory for `count` objects of an implicit-lifetime type T (contents undefined):

@@ -3,7 +3,7 @@
 // whole pieces, and the answers written piece by piece. The caller's arrays
 // (24 bytes a ray in, up to 32 out) are larger than any cache: spreading their traffic over
 // the tracing, instead of copying whole arrays before and after it, is what keeps the
-// package near the C++ stream API (perf/queries.md).
+// package near the C++ stream API (perf/reports/queries.md).
 #pragma once
 #include <algorithm>
 #include <cstddef>
@@ -66,7 +66,7 @@ struct HitColumns {
 /// The hits of the rays [b, b + m) (one piece) into `out` in Open3D's conventions: zeros
 /// for the uv and normal of a miss, and for the normal of a degenerate triangle. Plain
 /// stores: the piece's lines of the five columns stay in the cache for the next piece's
-/// (non-temporal stores of the five streams stalled on Zen 5, perf/queries.md).
+/// (non-temporal stores of the five streams stalled on Zen 5, perf/reports/queries.md).
 void write_hits(const Accel& accel, const Hit* hits, std::size_t b, std::size_t m, const HitColumns& out);
 
 }  // namespace volley::python

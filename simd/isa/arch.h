@@ -21,7 +21,7 @@ using Avx512 = xsimd::avx512bw;
 /// AVX-512 kernels on 8 float lanes (ymm registers; the compiler may use AVX-512VL
 /// encodings and 32 registers): one ray against the 8-triangle blocks of an AVX-512 wide
 /// BVH, whose leaves are sized for 8 (faster for shadow rays than 16-triangle leaves;
-/// perf/traversal.md). xsimd treats it as AVX2 + FMA; a tag of its
+/// perf/reports/traversal.md). xsimd treats it as AVX2 + FMA; a tag of its
 /// own keeps its symbols apart from isa_avx2.cpp's (docs/style.md rule 2). Built into
 /// isa_avx512.cpp only.
 struct Avx512Ymm : xsimd::fma3<xsimd::avx2> {

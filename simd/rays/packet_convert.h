@@ -2,7 +2,7 @@
 // consecutive rays turned into a packet's lanes by whole-ray loads and the transposes of
 // ray_transpose.h, and a packet of 16 hits back into Hit records by the inverse transpose,
 // instead of scalar copies, whose narrow stores the packet walks' first vector loads of the
-// same lines cannot forward from (perf/rays.md, "packets in and out"). Bodies templated on Arch,
+// same lines cannot forward from (perf/reports/rays.md, "packets in and out"). Bodies templated on Arch,
 // instantiated only in the per-ISA files isa_sse42.cpp, isa_avx2.cpp and isa_avx512.cpp;
 // src/accel/packet_convert.cpp picks the widest the CPU runs.
 #pragma once

@@ -1,7 +1,7 @@
 // Rays as eight floats each (volley::Ray's org, tmin, dir, tmax, or the stream walk's
 // per-ray lanes) turned into eight registers of one float per lane: the AoS-to-SoA step of
 // the stream walk's loads and of volley::load for packets. Shuffles of whole-ray loads,
-// which beat gathers (perf/rays.md, "transposed stream loads") and, for packets, leave the SoA arrays
+// which beat gathers (perf/reports/rays.md, "transposed stream loads") and, for packets, leave the SoA arrays
 // written by whole-vector stores that the packet walks' vector loads can forward from.
 #pragma once
 #include <immintrin.h>

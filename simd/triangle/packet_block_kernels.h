@@ -43,7 +43,7 @@ struct NearestLanes {
   }
   /// blocks[0 .. count), the last one's first `last` triangles only: whole blocks with a
   /// fixed trip count, then the last cut short (one loop with a variable bound ran 2% more
-  /// instructions on whole blocks: perf/rays.md).
+  /// instructions on whole blocks: perf/reports/rays.md).
   template <class Block>
   [[gnu::always_inline]] void blocks(const typename T::Rays& r, const Block* blocks, std::uint32_t count,
                                      int last) {
@@ -208,7 +208,7 @@ namespace detail {
 /// division (`sure`, as the single-ray form); a triangle is divided only when it has other
 /// candidates. No exit after the edge test: for shadow rays whether some lane passes
 /// inside is a coin toss, and the range prefilter, which almost never passes, is the one
-/// branch (perf/rays.md, "occlusion without the edge-test branch").
+/// branch (perf/reports/rays.md, "occlusion without the edge-test branch").
 template <class T, bool Uniform, int W, class Block, class Rays, class B, class M, class Sure>
 [[gnu::always_inline]] inline M occluded_chunk(const Rays& r, const Block* blocks, std::uint32_t count, int last,
                                                const B& upper, const Sure& sure, const M& act) {

@@ -24,7 +24,7 @@ struct RayBlockKernels {
   /// EarlyExit = false runs each block's test to the end instead of leaving it once no lane
   /// passes the edge tests: the walk's choice, since a leaf the walk reaches holds triangles
   /// near the ray and that branch mispredicts; with random blocks, as in the kernel
-  /// benchmarks, the exit wins, so the standalone forms keep it (perf/traversal.md).
+  /// benchmarks, the exit wins, so the standalone forms keep it (perf/reports/traversal.md).
   /// Excludes: the triangle whose id is `excluded` is never hit (the excluding queries).
   template <bool EarlyExit = true, bool Excludes = false>
   [[gnu::always_inline]] inline static void intersect_inline(const PreparedRay& ray, const Block* blocks,

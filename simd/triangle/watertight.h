@@ -109,7 +109,7 @@ struct WatertightTest {
   /// The any-hit forms' triangle lanes: broadcast_uniform() negated, origin minus vertex,
   /// for rays from negated() (the z scale negated too). AVX-512 folds a broadcast from
   /// memory into an instruction only as its second operand, so this is one instruction
-  /// per coordinate where vertex minus origin takes two (perf/rays.md, "fewer instructions per triangle test").
+  /// per coordinate where vertex minus origin takes two (perf/reports/rays.md, "fewer instructions per triangle test").
   /// Every decision is the same bit for bit: each nonzero value of the test is the
   /// original's, negated or not (rounding is symmetric; the edge functions and the
   /// depth terms are products of two negated factors), and an exact zero may differ
@@ -160,7 +160,7 @@ struct WatertightTest {
   };
   /// test()'s steps up to t det, for the any-hit forms. Both share edges(); the rest is
   /// written out twice on purpose: test() built on depth() ran more instructions
-  /// (perf/traversal.md).
+  /// (perf/reports/traversal.md).
   /// EarlyExit: return as soon as no lane is inside (the rest unset).
   template <bool EarlyExit = true>
   [[gnu::always_inline]] inline static Depth depth(const Rays& r, const Tris& tri);

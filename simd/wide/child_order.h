@@ -47,7 +47,7 @@ template <class Arch>
 /// hit children): sorted in registers by a stable network of compare-exchanges, the nearest
 /// reference never stored and reloaded as in the insertion sort of push_sorted. GCC
 /// compiles each exchange to a short branch; branch-free, the nearest would wait for every
-/// exchange (the variants measured: perf/traversal.md).
+/// exchange (the variants measured: perf/reports/traversal.md).
 template <class Arch>
 [[gnu::always_inline]] inline std::uint32_t push_three_or_four(const WideNode<8>& node, const float* dist, int i, int j,
                                                                std::uint32_t bits, WideStackItem<Arch>* stack,

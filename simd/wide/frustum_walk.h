@@ -26,7 +26,7 @@ namespace volley::simd {
 // have left it: a subtree no lane enters is skipped, one that few lanes enter
 // (kPacketSwitchLanes or fewer) goes to the single-ray walk lane by lane, as in the per-lane
 // walk. Without that second test the frustum opened twice the leaves on the kitchen's
-// primary rays (perf/traversal.md).
+// primary rays (perf/reports/traversal.md).
 template <class Arch, TriangleTest Test, bool Robust, int PK>
 template <class Query, class Leaves>
 std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,

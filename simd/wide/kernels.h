@@ -70,7 +70,7 @@ inline constexpr int kWidePacket = 16;
 
 /// Packet traversal hands a subtree to single-ray traversal, lane by lane, once this few
 /// lanes (or fewer) are still active in it (Embree's "switch threshold"; the value:
-/// perf/traversal.md).
+/// perf/reports/traversal.md).
 inline constexpr int kPacketSwitchLanes = 2;
 
 namespace detail {
@@ -78,7 +78,7 @@ namespace detail {
 /// Whether the packet walks test lanes in the single walk's fused form (one FMA per slab
 /// distance; PacketLanes::fused_slabs): on AVX-512. AVX2 has FMA too, but its 16 registers
 /// do not hold the form's nine constants beside the rest: kitchen shadow packets lost 6%
-/// there (perf/rays.md).
+/// there (perf/reports/rays.md).
 template <class Arch>
 inline constexpr bool kFusedLanes = kHasFma<Arch> && kLanes<Arch> == 16;
 
@@ -219,7 +219,7 @@ struct WideKernels {
 
  private:
   /// screen() as the packet entry takes it, inlined: a call there is measurable on shadow
-  /// packets (perf/rays.md).
+  /// packets (perf/reports/rays.md).
   [[gnu::always_inline]] inline static void screen_inline(RayPacket<K>& rays, detail::PacketSetup<K>& setup);
 
   /// The start of every single-ray trace, prepare_ray's work done here: the watertight
@@ -238,7 +238,7 @@ struct WideKernels {
   /// The single-ray walk. NoZero: no direction component is ±0, so no slab distance can be
   /// NaN and the entry and exit bounds may be combined as a tree (shorter dependency chain).
   /// Inlined into its callers: the call, its frame and the vzeroupper before it cost single
-  /// rays measurable time (perf/traversal.md).
+  /// rays measurable time (perf/reports/traversal.md).
   template <class Query, bool NoZero, class Leaves>
   [[gnu::always_inline]] inline static void walk(const WideView<Leaves>& bvh, const PreparedRay& ray, __m128 inv,
                                                  std::uint32_t start, Query& query);
@@ -259,7 +259,7 @@ struct WideKernels {
   /// whose lanes share one origin (pinhole primary rays), and by closest hits and instance
   /// top levels (Query::kSpreadFrustum) for origins that differ too; occlusion packets with
   /// spread origins (shadow rays from a 4x4 block of hit points, whose interval frustum grows
-  /// loose) take the per-lane walk (perf/traversal.md). Returns the lanes the query finished.
+  /// loose) take the per-lane walk (perf/reports/traversal.md). Returns the lanes the query finished.
   template <class Query, class Leaves>
   [[gnu::always_inline]] inline static std::uint32_t trace_frustum(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                      const detail::PacketSetup<K>& setup, Query& query);

@@ -16,7 +16,7 @@ namespace detail {
 /// reference (0 when none). With mask registers (AVX-512) the entered lanes stay in one and
 /// the node's references in a vector, so the first reference is one vpcompressd: the next
 /// node's address does not wait for movemask, bit scan and a load indexed by it, the
-/// longest chain of the walk (perf/traversal.md).
+/// longest chain of the walk (perf/reports/traversal.md).
 template <class Arch, bool Masks = kHasMaskRegisters<Arch>>
 struct ChildHits {
   std::uint32_t bits;

@@ -24,7 +24,7 @@ struct InstancesPacket {
   static constexpr bool kNearFirst = !AnyHit;  // any hit: the node's slot order, as AnyHitPacket
   /// The frustum walk also for spread origins (primary rays from a block of the viewport):
   /// instance boxes are large next to that spread, +7% on instanced primary rays, shadow
-  /// and diffuse rays unchanged (perf/instances.md). The lanes are not tested again at each
+  /// and diffuse rays unchanged (perf/reports/instances.md). The lanes are not tested again at each
   /// subtree popped: over the top level's few large boxes that cost 2-4%.
   static constexpr bool kSpreadFrustum = true;
   static constexpr bool kLanesOnPop = false;
@@ -84,7 +84,7 @@ struct ClosestHitPacket {
   static constexpr bool kNearFirst = true;
   /// The frustum walk for packets whose origins differ too (primary rays that start on their
   /// pixels): faster on every scene tried; occlusion keeps the per-lane walk for such
-  /// packets, since shadow rays' origins spread over surfaces (perf/traversal.md).
+  /// packets, since shadow rays' origins spread over surfaces (perf/reports/traversal.md).
   static constexpr bool kSpreadFrustum = true;
   HitPacket<K>& hits;
 

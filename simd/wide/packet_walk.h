@@ -28,7 +28,7 @@ namespace volley::simd {
 // tree larger than the caches overlap the packet's walk and one another instead of
 // following one another. Packets of mixed octants (bounce and ambient-occlusion rays, most
 // of which are blocked) walk them at once: deferred, a lane that a hand-off would have
-// finished stays in the packet's walk, which costs more than the misses (perf/rays.md,
+// finished stays in the packet's walk, which costs more than the misses (perf/reports/rays.md,
 // "deferred hand-offs on trees past the caches").
 // Uniform: every valid lane has the same octant, so the near and far planes are picked once
 // for the packet instead of per lane. NoZero: no lane has a zero direction component
@@ -219,7 +219,7 @@ std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet(const WideView<L
             }
             const M hit = act[c] & (entry <= exit);
             // (Computed under kBits too, though unread: without it GCC leaves the any-hit
-            // push loop rolled, 13-16% slower; perf/rays.md, "the bit stack".)
+            // push loop rolled, 13-16% slower; perf/reports/rays.md, "the bit stack".)
             dist[c] = xsimd::select(hit, entry, B(kNaN));
             if constexpr (kBits) entered |= detail::bits_from_mask<Arch>(hit) << (c * L);
             any |= xsimd::any(hit);
@@ -228,7 +228,7 @@ std::uint32_t WideKernels<Arch, Test, Robust, PK>::trace_packet(const WideView<L
         };
         if constexpr (kBits) {
           // Any order: every entered child pushed in slot order with no branch on whether
-          // it is entered (a coin toss to the predictor; perf/rays.md, "the stream walk"), then the
+          // it is entered (a coin toss to the predictor; perf/reports/rays.md, "the stream walk"), then the
           // first entered taken as next and the last moved into its place (other orders
           // measured: the same page).
           const int base = size;

@@ -33,7 +33,7 @@ struct StreamItem {
 
 /// The eight floats of the rays ids[0 .. L) as eight L-lane registers (out[f] lane l =
 /// data[8 ids[l] + f]): transposed from whole-ray loads, which on AVX-512 and AVX2 is 1.2x
-/// faster on bounce-ray streams than eight gathers (perf/rays.md).
+/// faster on bounce-ray streams than eight gathers (perf/reports/rays.md).
 template <class Arch>
 [[gnu::always_inline]] inline void load_rays(const float* data, const std::uint32_t* ids, FloatB<Arch> out[8]) {
   if constexpr (kLanes<Arch> == 16) {

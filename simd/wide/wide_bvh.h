@@ -77,7 +77,7 @@ inline void request_lines(std::uintptr_t first, std::size_t bytes) {
 }
 /// Requests the first block of leaf `ref` into the cache. The closest-hit walks and the
 /// frustum walk call it as soon as a node test finds the leaf entered, so that the misses
-/// of a node's entered leaves overlap instead of following one another (perf/rays.md,
+/// of a node's entered leaves overlap instead of following one another (perf/reports/rays.md,
 /// "leaf requests"; the any-hit single-ray and per-lane walks gained nothing from it). The
 /// address is formed as an integer: an empty tree's blocks are a null pointer.
 template <class Leaves>
@@ -86,7 +86,7 @@ inline void request_leaf(const Leaves* blocks, std::uint32_t ref) {
                 sizeof(Leaves));
 }
 /// Requests interior node `ref` (its boxes and references) into the cache: the frustum walk
-/// calls it for every child it pushes (perf/rays.md, "leaf requests").
+/// calls it for every child it pushes (perf/reports/rays.md, "leaf requests").
 template <int N>
 inline void request_node(const WideNode<N>* nodes, std::uint32_t ref) {
   request_lines(reinterpret_cast<std::uintptr_t>(nodes) + ref, sizeof(WideNode<N>));
@@ -117,7 +117,7 @@ struct WideView {
 
 /// Trees of at least this many bytes (nodes and blocks) defer the any-hit packet walk's
 /// hand-offs (WideView::defer_handoffs): past the last-level cache the hand-off walks wait
-/// on memory, which the deferral overlaps; on trees that fit, it only costs (perf/rays.md,
+/// on memory, which the deferral overlaps; on trees that fit, it only costs (perf/reports/rays.md,
 /// "deferred hand-offs on trees past the caches").
 inline constexpr std::size_t kDeferHandoffBytes = std::size_t{24} << 20;
 

@@ -74,7 +74,7 @@ struct Accel::Impl {
 
   /// What a ray that enters an instance reads of it, in one compact record per instance of
   /// a layer (the walk's visit was three dependent loads into Instance before: a cache
-  /// miss each, perf/instances.md).
+  /// miss each, perf/reports/instances.md).
   struct InstanceSlot {
     alignas(16) float object_columns[4][4];  ///< to_object by columns (lane 3 zero), for the SSE transform
     const Impl* prototype;                   ///< kept alive by the Instance
@@ -160,8 +160,8 @@ struct Accel::Impl {
     /// instances), and instances, if any, have packet walks (a SIMD ISA).
     bool packets = false;
     /// Runs of mixed octants may go as packets too: closest-hit runs when the packet shares
-    /// the instances' top level (perf/instances.md); runs whose walk needs no order
-    /// (occlusion, every hit) then and on AVX-512 and AVX2 (perf/rays.md).
+    /// the instances' top level (perf/reports/instances.md); runs whose walk needs no order
+    /// (occlusion, every hit) then and on AVX-512 and AVX2 (perf/reports/rays.md).
     bool mixed_closest = false;
     bool mixed_any = false;
     /// Every-hit runs may go as packets (packets, and no instances).

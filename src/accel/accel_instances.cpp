@@ -245,7 +245,7 @@ void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::ve
 
 // Packets: the top level is walked by the packet, and the lanes that reach an instance go
 // through its prototype one by one (querying the prototype as a packet when all 16 lanes
-// reached it was 3-5% slower on Zen 5, no faster on Sapphire Rapids: perf/instances.md).
+// reached it was 3-5% slower on Zen 5, no faster on Sapphire Rapids: perf/reports/instances.md).
 
 namespace {
 

@@ -130,7 +130,7 @@ void InstanceTree::build(const std::vector<core::BBox>& boxes, Isa isa, bool rob
                                 " instances in one layer");
   // Leaves of up to 8 instances where the SAH says so (priced low: the collapse spreads a
   // leaf's instances over slots of a wide node, each with a box of its own, so a leaf here
-  // only decides how instances are grouped into nodes; perf/instances.md).
+  // only decides how instances are grouped into nodes; perf/reports/instances.md).
   core::BvhBuildOptions options;
   options.max_leaf_size = 8;
   options.intersection_cost = 0.3f;

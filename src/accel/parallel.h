@@ -23,7 +23,7 @@ T* thread_buffer(T* p) {
 
 /// An arena of `threads` slots for the calling thread, made at its first use and kept until
 /// the thread ends: a batch call that made its own arena woke and joined its workers anew
-/// each time (perf/rays.md, "16 threads"). Per calling thread, so that two callers asking
+/// each time (perf/reports/rays.md, "16 threads"). Per calling thread, so that two callers asking
 /// for n threads each still get n each, as with an arena per call.
 tbb::task_arena& arena_of(int threads);
 

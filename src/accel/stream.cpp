@@ -43,7 +43,7 @@ void store_lane_bytes(std::uint32_t mask, std::uint8_t* out) {
 /// packets, and one octant or a plan that takes mixed octants for this walk (`ordered`:
 /// the closest hit; Accel::Impl::StreamPlan). Closest-hit runs of mixed octants go faster
 /// ray by ray, occlusion runs straddling an axis plane (shadow rays) as packets on AVX-512
-/// and AVX2 (perf/rays.md).
+/// and AVX2 (perf/reports/rays.md).
 /// `axes`: mixed_axes of the run, when known (-1: not yet).
 template <class Plan>
 bool as_packet(const Plan& plan, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {

@@ -189,7 +189,7 @@ struct Bins {
     // item by item, an update's address came at the end of a long chain (load, centroid,
     // convert, clamp), and the next item's bin loads ran ahead of the stores whose address
     // was still unknown, often to the same bin (neighbouring primitives): the loads waited or
-    // were replayed. Here the addresses are ready in a buffer (perf/build.md).
+    // were replayed. Here the addresses are ready in a buffer (perf/reports/build.md).
     constexpr std::uint32_t kBlock = 16;
     static_assert(kBlock % kSets == 0, "item begin + k goes into set k % kSets");
     alignas(16) std::uint32_t offsets[kBlock][4];

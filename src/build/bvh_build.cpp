@@ -7,7 +7,7 @@
 // registers (x, y, z and a 4th lane: 0, or a bin's count), extended with one minps and one
 // maxps; the sweep prices the three axes in the lanes of one register. Each is written to
 // evaluate the float operations of the scalar formulation it replaced (BBox, one axis at
-// a time), so the tree is bit for bit the one those gave (perf/build.md).
+// a time), so the tree is bit for bit the one those gave (perf/reports/build.md).
 //
 // Parallel build (oneTBB): a node of at least kTaskNode primitives is split by the
 // top-level recursion, which builds its two children as parallel tasks (and bins the

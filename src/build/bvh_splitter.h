@@ -73,7 +73,7 @@ class Splitter {
     // occupied anyway, and clearing and sweeping 3 x bins bins per node would otherwise
     // dominate the build for the many small nodes near the leaves.
     // Nodes of at most kSmallNode primitives get at most kSmallNodeBins: the bottom levels
-    // hold most nodes, and there 8 bins find planes as good for a faster build (perf/build.md).
+    // hold most nodes, and there 8 bins find planes as good for a faster build (perf/reports/build.md).
     int nb = count < static_cast<std::uint32_t>(opt_.bins) ? static_cast<int>(count) : opt_.bins;
     if (count <= kSmallNode && nb > kSmallNodeBins) nb = kSmallNodeBins;
     const BinGrid grid(t.cbox, nb);

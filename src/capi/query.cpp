@@ -102,7 +102,7 @@ void require_aligned(const void* p, const char* name) {
 // test, ISA and query mode). Single rays and packets check it here, where it is free: the
 // packet check is a branch-free pass over SoA lanes (|dx| + |dy| + |dz| is 0 exactly when
 // all three are; NaN and Inf never give 0). Streams do not: a pass over AoS rays would cost
-// a noticeable share of a stream of coherent rays (perf/traversal.md).
+// a noticeable share of a stream of coherent rays (perf/reports/traversal.md).
 
 /// True when d is the zero vector.
 bool zero_direction(const float* d) { return std::fabs(d[0]) + std::fabs(d[1]) + std::fabs(d[2]) == 0.0f; }

@@ -15,7 +15,7 @@ namespace volley::core {
 inline constexpr std::size_t kLargeAllocBytes = std::size_t{4} << 20;
 /// The same for the arrays every ray's walk reads (wide nodes, triangle blocks): their
 /// TLB reach pays from 1 MiB on, while the build's scratch arrays of that size are faster
-/// reused from the heap when a scene is rebuilt (perf/rays.md, "deferred hand-offs on trees past the caches").
+/// reused from the heap when a scene is rebuilt (perf/reports/rays.md, "deferred hand-offs on trees past the caches").
 inline constexpr std::size_t kWalkedAllocBytes = std::size_t{1} << 20;
 
 /// `bytes` of storage aligned to `align` (a power of two, at most 4096): operator new below

@@ -208,11 +208,11 @@ class VOLLEY_API Accel {
   /// masks of several values), the runs whose directions spread across two or more axis
   /// planes (bounce and ambient-occlusion rays), when they hold 256 rays or more, walk the
   /// tree together by the stream walk (docs/kernels.md; 1.2-2.3x the rate ray by ray on
-  /// diffuse rays, perf/rays.md). Other runs:
-  /// closest hits ray by ray, which was faster for diffuse rays (perf/traversal.md);
+  /// diffuse rays, perf/reports/rays.md). Other runs:
+  /// closest hits ray by ray, which was faster for diffuse rays (perf/reports/traversal.md);
   /// occlusion on AVX-512 and AVX2, and every run of a scene with instances, as a packet
   /// (shadow rays straddling one axis plane gained there; with instances a packet shares
-  /// the top level's walk: perf/instances.md); on AVX2, in a scene of one BVH and with no
+  /// the top level's walk: perf/reports/instances.md); on AVX2, in a scene of one BVH and with no
   /// masks, two neighbouring occlusion runs as one packet of 32 (docs/kernels.md). The stream walk reorders nothing the caller
   /// sees. Same answers as intersect(ray) per ray.
   /// `threads`, as in every batch call: 0 (the default) on the caller's oneTBB arena (all

@@ -30,7 +30,7 @@ enum class BuildQuality {
   medium,  ///< binned SAH over the triangles' boxes: fast to build, the default
   high,    ///< also spatial splits (SBVH): a triangle may be cut into several leaves' references;
            ///< several times slower to build, fewer nodes per ray where triangles are long and
-           ///< overlap (perf/rays.md has the scenes where it pays and where it does not)
+           ///< overlap (perf/reports/rays.md has the scenes where it pays and where it does not)
 };
 
 /// Options fixed at Accel::commit.
@@ -57,7 +57,7 @@ struct Options {
   /// BVH build quality. high applies to every ISA; answers are medium's (a triangle reached
   /// through several references is reported once) but where float rounding decides: a tie
   /// between two triangles at one t, or a hit at t near 0 on the ray's own start triangle,
-  /// may come out the other way (a few rays in 100,000 of the diffuse workloads; perf/rays.md).
+  /// may come out the other way (a few rays in 100,000 of the diffuse workloads; perf/reports/rays.md).
   BuildQuality quality = BuildQuality::medium;
 };
 

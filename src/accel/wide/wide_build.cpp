@@ -48,7 +48,7 @@ simd::WideNode<N> inert_node() {
 // node is written). The subtrees below the top kTopDepth wide levels are walked in
 // parallel, each alone into its own arrays (local indices, local blocks); the few top nodes
 // are then laid out around them and the subtrees copied into place with their references
-// moved (a serial walk dominated many-thread builds: perf/build.md).
+// moved (a serial walk dominated many-thread builds: perf/reports/build.md).
 constexpr std::size_t kTopDepth = 3;
 
 // The statistics a walk gathers, summed in a fixed order (the same for any number of
@@ -140,7 +140,7 @@ class WideLayout {
   // The wide node of binary node n's children (a lone leaf root: itself), leaves first, then
   // larger boxes first. Closest-hit traversal sorts the children it meets by distance, but
   // any hit takes them in this order, and a leaf can end it at once while a larger box is
-  // likelier to hold an occluder (perf/traversal.md). A stable insertion sort.
+  // likelier to hold an occluder (perf/reports/traversal.md). A stable insertion sort.
   Kids ordered_kids(std::uint32_t n) const {
     Kids kids;
     if (bvh_.nodes[n].is_leaf())

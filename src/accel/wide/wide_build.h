@@ -20,7 +20,7 @@ namespace volley::accel {
 /// empty box (the builder's subtree of degenerate triangles, which no ray can hit) are left
 /// out, the others keep the binary node's box bit for bit (so the slab tests agree with the
 /// oracle's). Fewer, fuller nodes than the greedy collapse (open the largest child until N;
-/// perf/build.md).
+/// perf/reports/build.md).
 /// Interior children of a node are allocated next to each other, depth first; leaves' blocks
 /// in the order the collapse meets them. Unused child slots are inert.
 ///

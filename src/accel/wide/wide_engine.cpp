@@ -15,7 +15,7 @@ static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "triangles are read as pac
 /// `intersection_cost` node visits: a block tests W triangles at about the cost of one node
 /// visit for a single ray, but packets test every triangle of a leaf against all their
 /// lanes, so the best cost lies above 1/W. For W >= 8 an empty block slot is priced too, so
-/// that leaves fill their blocks. The values and their measurements: perf/build.md.
+/// that leaves fill their blocks. The values and their measurements: perf/reports/build.md.
 core::BvhBuildOptions wide_build_options(int w) {
   core::BvhBuildOptions o;
   o.max_leaf_size = 16;

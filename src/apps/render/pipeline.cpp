@@ -6,11 +6,11 @@ namespace volley::render {
 namespace {
 
 // Why the renderer does not cull back faces for occlusion rays even where it may: culling
-// measured faster (perf/specialize.md), but the SIMD occlusion kernels have no culling
+// measured faster (perf/reports/specialize.md), but the SIMD occlusion kernels have no culling
 // variant to choose.
 constexpr const char* kCullingNotUsed =
     "the SIMD occlusion kernels have no culling variant yet (an experimental one measured 12-15% less occlusion "
-    "time, 3-4% of the render, same image, on dragon_100k: perf/specialize.md)";
+    "time, 3-4% of the render, same image, on dragon_100k: perf/reports/specialize.md)";
 
 }  // namespace
 
