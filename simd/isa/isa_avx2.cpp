@@ -8,9 +8,8 @@
 
 namespace volley::simd {
 
-template struct PacketKernels<Avx2, TriangleTest::moller, 16>;
-template struct PacketKernels<Avx2, TriangleTest::plane, 16>;
-template struct PacketKernels<Avx2, TriangleTest::watertight, 16>;
+// The packet kernels of the one table (kernel_table.h), every triangle test.
+VOLLEY_LIBRARY_avx2(VOLLEY_DEFINE_PACKETS)
 
 // volley::load and volley::store of whole packets (src/accel/packet_convert.cpp dispatches).
 template struct PacketConvert<Avx2>;

@@ -8,10 +8,8 @@
 
 namespace volley::simd {
 
-// Packets of 16 against the 8-triangle blocks of the AVX-512 wide BVH (arch.h).
-template struct PacketKernels<Avx512, TriangleTest::moller, 16, 8>;
-template struct PacketKernels<Avx512, TriangleTest::plane, 16, 8>;
-template struct PacketKernels<Avx512, TriangleTest::watertight, 16, 8>;
+// The packet kernels of the one table (kernel_table.h), every triangle test.
+VOLLEY_LIBRARY_avx512(VOLLEY_DEFINE_PACKETS)
 
 // volley::load and volley::store of whole packets (src/accel/packet_convert.cpp dispatches).
 template struct PacketConvert<Avx512>;

@@ -9,16 +9,11 @@
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+#include "simd/isa/kernel_table.h"
 #include "simd/wide/wide_traverse.h"
 
 namespace volley::simd {
 
-template struct WideKernels<Avx512, TriangleTest::moller>;
-template struct WideKernels<Avx512, TriangleTest::plane>;
-template struct WideKernels<Avx512, TriangleTest::watertight>;
-// Options::robust = false: the unpadded slab test (the fast path, and the mutation tests).
-template struct WideKernels<Avx512, TriangleTest::moller, false>;
-template struct WideKernels<Avx512, TriangleTest::plane, false>;
-template struct WideKernels<Avx512, TriangleTest::watertight, false>;
+VOLLEY_DEFINE_WIDE(Avx512)  // the one table: simd/isa/kernel_table.h
 
 }  // namespace volley::simd

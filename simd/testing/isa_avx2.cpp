@@ -5,13 +5,7 @@
 
 namespace volley::simd {
 
-// For each triangle test: the single-ray block kernels, packets of 8.
-#define VOLLEY_FORMS(test) \
-  template struct RayBlockKernels<Avx2, TriangleTest::test>; \
-  template struct PacketKernels<Avx2, TriangleTest::test, 8>;
-VOLLEY_FORMS(moller)
-VOLLEY_FORMS(plane)
-VOLLEY_FORMS(watertight)
-#undef VOLLEY_FORMS
+// The laboratory's rows of the one table (simd/isa/kernel_table.h), every triangle test.
+VOLLEY_TESTING_avx2(VOLLEY_DEFINE_PACKETS, VOLLEY_DEFINE_RAYS)
 
 }  // namespace volley::simd

@@ -5,14 +5,7 @@
 
 namespace volley::simd {
 
-// For each triangle test: the single-ray block kernels, packets of 4 and 8.
-#define VOLLEY_FORMS(test) \
-  template struct RayBlockKernels<Sse42, TriangleTest::test>; \
-  template struct PacketKernels<Sse42, TriangleTest::test, 4>; \
-  template struct PacketKernels<Sse42, TriangleTest::test, 8>;
-VOLLEY_FORMS(moller)
-VOLLEY_FORMS(plane)
-VOLLEY_FORMS(watertight)
-#undef VOLLEY_FORMS
+// The laboratory's rows of the one table (simd/isa/kernel_table.h), every triangle test.
+VOLLEY_TESTING_sse42(VOLLEY_DEFINE_PACKETS, VOLLEY_DEFINE_RAYS)
 
 }  // namespace volley::simd
