@@ -88,19 +88,11 @@ inline void add_count_modes(std::vector<Mode>& modes, const EmbreeScene& embree,
   modes.push_back({"count16", "rtcIntersect16+filter", "count_intersections(Ray*, n)", false,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
                      CountingContext c(coherent);
-                     alignas(64) RTCRayHit16 e;
-                     alignas(64) int valid[16];
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       for (int i = 0; i < 16; ++i) {
-                         valid[i] = i < n ? -1 : 0;
-                         if (i < n) to_embree(rays[b + i], e, i);
-                         e.ray.id[i] = unsigned(i);
-                       }
+                     for_each_embree16(rays, [&](RTCRayHit16& e, int* valid, std::size_t b, int n) {
                        c.reset();
                        rtcIntersect16(valid, scene, &c.context, &e);
                        for (int i = 0; i < n; ++i) out.counts[b + i] = c.count[i];
-                     }
+                     });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      // The batch form on the calling thread: runs of 16 as packets where the stream policy says so.

@@ -11,6 +11,7 @@
 #pragma once
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -206,6 +207,22 @@ inline void to_embree(const Ray& r, RTCRayHit16& e, int i) {
   e.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
   e.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
   e.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+}
+
+/// Calls trace(packet, valid, b, n) for each run rays[b .. b + n) of up to 16 rays as an
+/// Embree 16-ray packet (lanes past the end invalid), b = 0, 16, 32, ...
+template <class Trace>
+void for_each_embree16(const std::vector<Ray>& rays, Trace&& trace) {
+  alignas(64) RTCRayHit16 e;
+  alignas(64) int valid[16];
+  for (std::size_t b = 0; b < rays.size(); b += 16) {
+    const int n = int(std::min<std::size_t>(16, rays.size() - b));
+    for (int i = 0; i < 16; ++i) {
+      valid[i] = i < n ? -1 : 0;
+      if (i < n) to_embree(rays[b + i], e, i);
+    }
+    trace(e, valid, b, n);
+  }
 }
 
 /// Lane i of an Embree 16-ray packet answer as a volley Hit.

@@ -70,17 +70,10 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
   modes.push_back({"packet", "rtcIntersect16", "intersect(RayPacket<16>)", false,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
                      RTCIntersectContext context = make_context(coherent);
-                     alignas(64) RTCRayHit16 e;
-                     alignas(64) int valid[16];
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       for (int i = 0; i < 16; ++i) {
-                         valid[i] = i < n ? -1 : 0;
-                         if (i < n) to_embree(rays[b + i], e, i);
-                       }
+                     for_each_embree16(rays, [&](RTCRayHit16& e, int* valid, std::size_t b, int n) {
                        rtcIntersect16(valid, scene, &context, &e);
                        for (int i = 0; i < n; ++i) out.hits[b + i] = from_embree(e, i);
-                     }
+                     });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      RayPacket<16> packet;
@@ -127,17 +120,10 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
   modes.push_back({"occluded16", "rtcOccluded16", "occluded(RayPacket<16>)", true,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
                      RTCIntersectContext context = make_context(coherent);
-                     alignas(64) RTCRayHit16 e;
-                     alignas(64) int valid[16];
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       for (int i = 0; i < 16; ++i) {
-                         valid[i] = i < n ? -1 : 0;
-                         if (i < n) to_embree(rays[b + i], e, i);
-                       }
+                     for_each_embree16(rays, [&](RTCRayHit16& e, int* valid, std::size_t b, int n) {
                        rtcOccluded16(valid, scene, &context, &e.ray);
                        for (int i = 0; i < n; ++i) out.blocked[b + i] = e.ray.tfar[i] == kNegInf ? 1 : 0;
-                     }
+                     });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      RayPacket<16> packet;

@@ -190,6 +190,19 @@ const Hit* excluded_in(const Hit* excluded, std::uint32_t geometry, Hit& inner) 
   return &inner;
 }
 
+/// Instance `in`'s answer for a world-space ray: its prototype asked in object space up
+/// to `bound`, skipping `excluded` where that lies inside this instance.
+template <bool AnyHit, class Slot>
+auto query_instance(const Slot& in, const Ray& ray, float bound, std::uint32_t mask, const Hit* excluded) {
+  const Ray local = to_object(in.object_columns, ray, bound);
+  Hit inner;
+  const Hit* skip = excluded_in(excluded, in.geometry, inner);
+  if constexpr (AnyHit)
+    return skip ? in.prototype->occluded_excluding(local, mask, *skip) : in.prototype->occluded(local, mask);
+  else
+    return skip ? in.prototype->intersect_excluding(local, mask, *skip) : in.prototype->intersect(local, mask);
+}
+
 }  // namespace
 
 bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit, const Hit* excluded) const {
@@ -197,14 +210,10 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
-      const InstanceSlot& in = l.instances[k];
-      const Ray local = to_object(in.object_columns, ray, bound);
-      Hit inner;
-      const Hit* skip = excluded_in(excluded, in.geometry, inner);
-      Hit h = skip ? in.prototype->intersect_excluding(local, mask, *skip) : in.prototype->intersect(local, mask);
+      Hit h = query_instance<false>(l.instances[k], ray, bound, mask, excluded);
       if (!h.hit()) return false;
       bound = h.t;
-      h.inst = in.geometry;
+      h.inst = l.instances[k].geometry;
       hit = h;
       found = true;
       return true;
@@ -218,11 +227,7 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask, const H
   for (const Layer& l : layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
-      const InstanceSlot& in = l.instances[k];
-      const Ray local = to_object(in.object_columns, ray, bound);
-      Hit inner;
-      const Hit* skip = excluded_in(excluded, in.geometry, inner);
-      return skip ? in.prototype->occluded_excluding(local, mask, *skip) : in.prototype->occluded(local, mask);
+      return query_instance<true>(l.instances[k], ray, bound, mask, excluded);
     };
     if (l.instance_tree.walk(simd::InstanceWalk::any, ray, ray.tmax, leaf)) return true;
   }

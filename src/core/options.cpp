@@ -2,52 +2,47 @@
 #include "volley/options.h"
 
 namespace volley {
+namespace {
 
-std::string_view to_string(TriangleTest test) {
-  switch (test) {
-    case TriangleTest::plane: return "plane";
-    case TriangleTest::moller: return "moller";
-    case TriangleTest::watertight: return "watertight";
-  }
+// One table per enum: its to_string and its parse read the same names.
+template <class E>
+struct Name {
+  E value;
+  std::string_view name;
+};
+
+constexpr Name<TriangleTest> kTriangleTests[] = {
+    {TriangleTest::plane, "plane"}, {TriangleTest::moller, "moller"}, {TriangleTest::watertight, "watertight"}};
+constexpr Name<Isa> kIsas[] = {{Isa::automatic, "auto"}, {Isa::scalar, "scalar"}, {Isa::sse42, "sse4.2"},
+                               {Isa::avx2, "avx2"},      {Isa::avx512, "avx512"}};
+constexpr Name<BuildQuality> kBuildQualities[] = {{BuildQuality::medium, "medium"}, {BuildQuality::high, "high"}};
+
+template <class E, std::size_t N>
+std::string_view name_of(E value, const Name<E> (&names)[N]) {
+  for (const Name<E>& n : names)
+    if (n.value == value) return n.name;
   return "?";
 }
 
-std::string_view to_string(Isa isa) {
-  switch (isa) {
-    case Isa::automatic: return "auto";
-    case Isa::scalar: return "scalar";
-    case Isa::sse42: return "sse4.2";
-    case Isa::avx2: return "avx2";
-    case Isa::avx512: return "avx512";
-  }
-  return "?";
-}
-
-std::string_view to_string(BuildQuality quality) {
-  switch (quality) {
-    case BuildQuality::medium: return "medium";
-    case BuildQuality::high: return "high";
-  }
-  return "?";
-}
-
-std::optional<BuildQuality> parse_build_quality(std::string_view name) {
-  for (BuildQuality q : {BuildQuality::medium, BuildQuality::high})
-    if (name == to_string(q)) return q;
+template <class E, std::size_t N>
+std::optional<E> value_of(std::string_view name, const Name<E> (&names)[N]) {
+  for (const Name<E>& n : names)
+    if (n.name == name) return n.value;
   return std::nullopt;
 }
 
-std::optional<TriangleTest> parse_triangle_test(std::string_view name) {
-  for (TriangleTest t : {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight})
-    if (name == to_string(t)) return t;
-  return std::nullopt;
-}
+}  // namespace
+
+std::string_view to_string(TriangleTest test) { return name_of(test, kTriangleTests); }
+std::string_view to_string(Isa isa) { return name_of(isa, kIsas); }
+std::string_view to_string(BuildQuality quality) { return name_of(quality, kBuildQualities); }
+
+std::optional<BuildQuality> parse_build_quality(std::string_view name) { return value_of(name, kBuildQualities); }
+std::optional<TriangleTest> parse_triangle_test(std::string_view name) { return value_of(name, kTriangleTests); }
 
 std::optional<Isa> parse_isa(std::string_view name) {
-  for (Isa isa : {Isa::automatic, Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512})
-    if (name == to_string(isa)) return isa;
   if (name == "sse42") return Isa::sse42;
-  return std::nullopt;
+  return value_of(name, kIsas);
 }
 
 }  // namespace volley

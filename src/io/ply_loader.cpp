@@ -44,15 +44,7 @@ class Tokenizer {
 
   /// The next token; throws "file ends early" with `what` when there is none.
   std::string_view next(const char* what) {
-    while (pos_ < text_.size() && is_space(text_[pos_])) {
-      if (text_[pos_] == '\n') {
-        ++line_;
-        line_start_ = pos_ + 1;
-      }
-      ++pos_;
-    }
-    token_line_ = line_;
-    token_column_ = pos_ - line_start_ + 1;
+    skip_space();
     if (pos_ == text_.size()) fail(std::string("file ends early: expected ") + what);
     const std::size_t begin = pos_;
     while (pos_ < text_.size() && !is_space(text_[pos_])) ++pos_;
@@ -60,15 +52,7 @@ class Tokenizer {
   }
 
   bool at_end() {
-    while (pos_ < text_.size() && is_space(text_[pos_])) {
-      if (text_[pos_] == '\n') {
-        ++line_;
-        line_start_ = pos_ + 1;
-      }
-      ++pos_;
-    }
-    token_line_ = line_;
-    token_column_ = pos_ - line_start_ + 1;
+    skip_space();
     return pos_ == text_.size();
   }
 
@@ -98,6 +82,19 @@ class Tokenizer {
   [[noreturn]] void fail(const std::string& what) const { throw LoadError(file_, token_line_, token_column_, what); }
 
  private:
+  /// Moves past spaces and newlines to the next token and records where it starts.
+  void skip_space() {
+    while (pos_ < text_.size() && is_space(text_[pos_])) {
+      if (text_[pos_] == '\n') {
+        ++line_;
+        line_start_ = pos_ + 1;
+      }
+      ++pos_;
+    }
+    token_line_ = line_;
+    token_column_ = pos_ - line_start_ + 1;
+  }
+
   const std::filesystem::path& file_;
   std::string_view text_;
   std::size_t pos_;

@@ -46,6 +46,13 @@ inline std::vector<Isa> simd_isas() {
   return out;
 }
 
+/// The SIMD ISAs this CPU runs, then the scalar oracle.
+inline std::vector<Isa> all_isas() {
+  std::vector<Isa> out = simd_isas();
+  out.push_back(Isa::scalar);
+  return out;
+}
+
 /// Triangles as packed xyz (9 floats each), with an indexed form for Accel.
 struct Soup {
   std::vector<float> xyz;
@@ -110,6 +117,23 @@ inline std::vector<Hit> brute_force_all(const Soup& soup, TriangleTest test, con
   std::vector<Hit> out(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) out[i] = brute_force(soup, test, rays[i], isa);
   return out;
+}
+
+/// Calls f(test, isa, want) for every triangle test and SIMD ISA this CPU runs, `want` the
+/// brute-force closest hits of `rays` at that ISA; checks that the rays tell walks apart
+/// (more than a tenth and fewer than nine tenths hit) and names the test and ISA in failures.
+template <class F>
+void against_brute_force(const Soup& soup, const std::vector<Ray>& rays, F&& f) {
+  for (TriangleTest test : kTests)
+    for (Isa isa : simd_isas()) {
+      CAPTURE(std::string(volley::to_string(test)));
+      CAPTURE(std::string(volley::to_string(isa)));
+      const std::vector<Hit> want = brute_force_all(soup, test, rays, isa);
+      const auto hits = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
+      CHECK(hits > static_cast<long>(want.size() / 10));
+      CHECK(hits < static_cast<long>(want.size() * 9 / 10));
+      f(test, isa, want);
+    }
 }
 
 /// Same answer: the same primitive of the same geometry (and instance), or both hits at

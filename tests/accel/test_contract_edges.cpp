@@ -54,8 +54,7 @@ TEST_CASE("contract: a reported t keeps tmin <= t < tmax when the interval ends 
   // interval before the quotient was checked too. Every test, every ISA, the oracle.
   const Soup soup = random_soup(600, 31);
   const std::vector<Ray> base = mixed_rays(60, 10.0f, 37);
-  std::vector<Isa> isas = simd_isas();
-  isas.push_back(Isa::scalar);
+  const std::vector<Isa> isas = all_isas();
   for (TriangleTest test : kTests) {
     for (Isa isa : isas) {
       const std::string what = std::string(volley::to_string(test)) + " " + std::string(volley::to_string(isa));

@@ -81,40 +81,33 @@ TEST_CASE("stream walk: the kernels' stream forms equal brute force on every ISA
   const std::vector<Ray> mixed = mixed_rays(40, 10.0f, 9);
   rays.insert(rays.end(), mixed.begin(), mixed.end());
   const Built built = build(soup);
-  for (TriangleTest test : kTests)
-    for (Isa isa : simd_isas()) {
-      CAPTURE(std::string(volley::to_string(test)));
-      CAPTURE(std::string(volley::to_string(isa)));
-      const std::vector<Hit> want = brute_force_all(soup, test, rays, isa);
-      const auto hits_wanted = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
-      CHECK(hits_wanted > static_cast<long>(rays.size() / 10));
-      CHECK(hits_wanted < static_cast<long>(rays.size() * 9 / 10));
-      const auto wide = volley::accel::WideAccel::create(test, isa);
-      wide->build(built.bvh, soup.xyz.data(), built.ids.data());
+  against_brute_force(soup, rays, [&](TriangleTest test, Isa isa, const std::vector<Hit>& want) {
+    const auto wide = volley::accel::WideAccel::create(test, isa);
+    wide->build(built.bvh, soup.xyz.data(), built.ids.data());
 
-      std::vector<Hit> hits(rays.size());
-      wide->intersect(rays.data(), rays.size(), hits.data());
-      std::vector<std::uint8_t> blocked(rays.size(), 7);
-      wide->occluded(rays.data(), rays.size(), blocked.data());
-      std::size_t wrong = 0, wrong_blocked = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        wrong += !agree(hits[i], want[i]);
-        wrong_blocked += blocked[i] != (want[i].hit() ? 1 : 0);
-      }
-      CHECK(wrong == 0);
-      CHECK(wrong_blocked == 0);
+    std::vector<Hit> hits(rays.size());
+    wide->intersect(rays.data(), rays.size(), hits.data());
+    std::vector<std::uint8_t> blocked(rays.size(), 7);
+    wide->occluded(rays.data(), rays.size(), blocked.data());
+    std::size_t wrong = 0, wrong_blocked = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      wrong += !agree(hits[i], want[i]);
+      wrong_blocked += blocked[i] != (want[i].hit() ? 1 : 0);
+    }
+    CHECK(wrong == 0);
+    CHECK(wrong_blocked == 0);
 
 CHECK(wrong_with_bounds(*wide, rays, want) == 0);
 
-      // Short streams and odd lengths (below a group of lanes, one ray, none).
-      for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{15}, std::size_t{17}, std::size_t{300}}) {
-        std::vector<Hit> few(n);
-        wide->intersect(rays.data() + 100, n, few.data());
-        std::size_t wrong_few = 0;
-        for (std::size_t i = 0; i < n; ++i) wrong_few += !agree(few[i], want[100 + i]);
-        CHECK(wrong_few == 0);
-      }
+    // Short streams and odd lengths (below a group of lanes, one ray, none).
+    for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{15}, std::size_t{17}, std::size_t{300}}) {
+      std::vector<Hit> few(n);
+      wide->intersect(rays.data() + 100, n, few.data());
+      std::size_t wrong_few = 0;
+      for (std::size_t i = 0; i < n; ++i) wrong_few += !agree(few[i], want[100 + i]);
+      CHECK(wrong_few == 0);
     }
+  });
 }
 
 TEST_CASE("stream walk: rays touching leaf boxes at vertices need its slab padding (mutation check)") {

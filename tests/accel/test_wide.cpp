@@ -17,6 +17,7 @@
 
 #include "accel/wide/wide_accel.h"
 #include "accel_test_util.h"
+#include "common/slab_grid.h"
 #include "core/bvh.h"
 #include "core/triangle.h"
 #include "io/obj_loader.h"
@@ -119,34 +120,10 @@ TEST_CASE("wide: NaN and Inf lanes miss without disturbing the other lanes of th
 }
 
 TEST_CASE("wide: flat axis-aligned geometry, origins on slab planes, zero direction components (stress 4)") {
-  // A floor of unit quads at z = 0 (flat boxes) and walls in the planes x = 4, 8 and y = 4, 8;
-  // axis-aligned rays (other components ±0) from integer and half-integer coordinates run
-  // exactly in slab planes, where 0 * inf = NaN must keep the node.
-  constexpr int G = 12;
+  // 0 * inf = NaN in a slab test must keep the node.
   Soup soup;
-  auto quad = [&](glm::vec3 p, glm::vec3 e1, glm::vec3 e2) {
-    soup.add(p, p + e1, p + e1 + e2);
-    soup.add(p, p + e1 + e2, p + e2);
-  };
-  for (int i = 0; i < G; ++i)
-    for (int j = 0; j < G; ++j) quad({float(i), float(j), 0}, {1, 0, 0}, {0, 1, 0});
-  for (int w = 4; w < G; w += 4)
-    for (int j = 0; j < G; ++j)
-      for (int k = -2; k < 2; ++k) {
-        quad({float(w), float(j), float(k)}, {0, 1, 0}, {0, 0, 1});
-        quad({float(j), float(w), float(k)}, {1, 0, 0}, {0, 0, 1});
-      }
-  std::vector<Ray> rays;
-  for (float zero : {0.0f, -0.0f})
-    for (int a = 0; a <= 2 * G; ++a)
-      for (int b = -4; b <= 4; ++b) {
-        const float x = 0.5f * a, h = 0.5f * b;
-        rays.push_back(make_ray({x, 0.5f * (a / 2 + b + 4), 5}, {zero, zero, -1}));
-        rays.push_back(make_ray({x, x, 5}, {zero, zero, -2}));
-        rays.push_back(make_ray({-1, x, h}, {1, zero, zero}));
-        rays.push_back(make_ray({x, G + 1.0f, h}, {zero, -1, zero}));
-        rays.push_back(make_ray({x, 0.5f * (b + 4), 0}, {1, zero, zero}));
-      }
+  const std::vector<Ray> rays =
+      volley::test::slab_plane_grid<Ray>(12, soup, [](glm::vec3 o, glm::vec3 d) { return make_ray(o, d); });
   for (TriangleTest test : kTests) {
     const std::vector<Hit> want = brute_force_all(soup, test, rays);
     CHECK(std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); }) >

@@ -107,63 +107,56 @@ TEST_CASE("wide: occlusion packets with deferred hand-offs answer as brute force
   }
   const std::vector<Ray> mixed = mixed_rays(70, 10.0f, 47);
   rays.insert(rays.end(), mixed.begin(), mixed.end());
-  for (TriangleTest test : kTests)
-    for (Isa isa : simd_isas()) {
-      CAPTURE(std::string(volley::to_string(test)));
-      CAPTURE(std::string(volley::to_string(isa)));
-      const std::vector<Hit> want = brute_force_all(soup, test, rays, isa);
-      const auto blocked = std::count_if(want.begin(), want.end(), [](const Hit& h) { return h.hit(); });
-      CHECK(blocked > static_cast<long>(rays.size() / 10));
-      CHECK(blocked < static_cast<long>(rays.size() * 9 / 10));
-      const auto wide = volley::accel::WideAccel::create(test, isa);
-      wide->build(bvh, soup.xyz.data(), ids.data());
-      for (bool defer : {true, false}) {
-        CAPTURE(defer);
-        wide->defer_handoffs(defer);
-        std::size_t wrong = 0, wrong_partial = 0, wrong_poisoned = 0;
-        volley::RayPacket<16> p;
-        for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
-          volley::load(p, rays.data() + first, 16);
-          const std::uint32_t all = wide->occluded(p);
-          p.active = 0xb5a6u;
-          const std::uint32_t partial = wide->occluded(p);
-          p.active = 0xffffu;
-          for (int i = 1; i < 16; i += 5) p.dz[i] = kNaN;
-          const std::uint32_t poisoned = wide->occluded(p);
-          for (int i = 0; i < 16; ++i) {
-            const bool hit = want[first + i].hit();
-            wrong += ((all >> i) & 1u) != (hit ? 1u : 0u);
-            wrong_partial += ((partial >> i) & 1u) != ((0xb5a6u >> i) & 1u && hit ? 1u : 0u);
-            wrong_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && hit ? 1u : 0u);
-          }
+  against_brute_force(soup, rays, [&](TriangleTest test, Isa isa, const std::vector<Hit>& want) {
+    const auto wide = volley::accel::WideAccel::create(test, isa);
+    wide->build(bvh, soup.xyz.data(), ids.data());
+    for (bool defer : {true, false}) {
+      CAPTURE(defer);
+      wide->defer_handoffs(defer);
+      std::size_t wrong = 0, wrong_partial = 0, wrong_poisoned = 0;
+      volley::RayPacket<16> p;
+      for (std::size_t first = 0; first + 16 <= rays.size(); first += 16) {
+        volley::load(p, rays.data() + first, 16);
+        const std::uint32_t all = wide->occluded(p);
+        p.active = 0xb5a6u;
+        const std::uint32_t partial = wide->occluded(p);
+        p.active = 0xffffu;
+        for (int i = 1; i < 16; i += 5) p.dz[i] = kNaN;
+        const std::uint32_t poisoned = wide->occluded(p);
+        for (int i = 0; i < 16; ++i) {
+          const bool hit = want[first + i].hit();
+          wrong += ((all >> i) & 1u) != (hit ? 1u : 0u);
+          wrong_partial += ((partial >> i) & 1u) != ((0xb5a6u >> i) & 1u && hit ? 1u : 0u);
+          wrong_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && hit ? 1u : 0u);
         }
-        CHECK(wrong == 0);
-        CHECK(wrong_partial == 0);
-        CHECK(wrong_poisoned == 0);
-        // Double packets (32 lanes: on AVX2 one walk, elsewhere two packets), lanes of
-        // the upper half inactive or poisoned too.
-        constexpr std::uint32_t kSome = 0xc3e1b5a6u;
-        std::size_t wrong32 = 0, wrong32_partial = 0, wrong32_poisoned = 0;
-        volley::RayPacket<32> d;
-        for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
-          volley::load(d, rays.data() + first, 32);
-          const std::uint32_t all = wide->occluded(d);
-          d.active = kSome;
-          const std::uint32_t partial = wide->occluded(d);
-          d.active = ~0u;
-          for (int i = 1; i < 32; i += 5) d.dz[i] = kNaN;
-          d.tmax[30] = kNaN;
-          const std::uint32_t poisoned = wide->occluded(d);
-          for (int i = 0; i < 32; ++i) {
-            const bool hit = want[first + i].hit();
-            wrong32 += ((all >> i) & 1u) != (hit ? 1u : 0u);
-            wrong32_partial += ((partial >> i) & 1u) != ((kSome >> i) & 1u && hit ? 1u : 0u);
-            wrong32_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && i != 30 && hit ? 1u : 0u);
-          }
-        }
-        CHECK(wrong32 == 0);
-        CHECK(wrong32_partial == 0);
-        CHECK(wrong32_poisoned == 0);
       }
+      CHECK(wrong == 0);
+      CHECK(wrong_partial == 0);
+      CHECK(wrong_poisoned == 0);
+      // Double packets (32 lanes: on AVX2 one walk, elsewhere two packets), lanes of
+      // the upper half inactive or poisoned too.
+      constexpr std::uint32_t kSome = 0xc3e1b5a6u;
+      std::size_t wrong32 = 0, wrong32_partial = 0, wrong32_poisoned = 0;
+      volley::RayPacket<32> d;
+      for (std::size_t first = 0; first + 32 <= rays.size(); first += 32) {
+        volley::load(d, rays.data() + first, 32);
+        const std::uint32_t all = wide->occluded(d);
+        d.active = kSome;
+        const std::uint32_t partial = wide->occluded(d);
+        d.active = ~0u;
+        for (int i = 1; i < 32; i += 5) d.dz[i] = kNaN;
+        d.tmax[30] = kNaN;
+        const std::uint32_t poisoned = wide->occluded(d);
+        for (int i = 0; i < 32; ++i) {
+          const bool hit = want[first + i].hit();
+          wrong32 += ((all >> i) & 1u) != (hit ? 1u : 0u);
+          wrong32_partial += ((partial >> i) & 1u) != ((kSome >> i) & 1u && hit ? 1u : 0u);
+          wrong32_poisoned += ((poisoned >> i) & 1u) != (i % 5 != 1 && i != 30 && hit ? 1u : 0u);
+        }
+      }
+      CHECK(wrong32 == 0);
+      CHECK(wrong32_partial == 0);
+      CHECK(wrong32_poisoned == 0);
     }
+  });
 }

@@ -8,11 +8,7 @@
 #include "cli/cli_run.h"
 
 namespace fs = std::filesystem;
-using volley::test::has;
-using volley::test::kCornell;
-using volley::test::Run;
-using volley::test::run;
-using volley::test::temp_path;
+using namespace volley::test;
 
 TEST_CASE("cli conventions: argument errors exit with 2 and the volley: error: prefix") {
   const char* usage_errors[] = {

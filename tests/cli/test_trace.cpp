@@ -18,20 +18,7 @@
 
 namespace fs = std::filesystem;
 using namespace volley;
-
-namespace {
-
-using test::has;
-using test::kCornell;
-using test::Run;
-using test::run;
-using test::temp_file;
-using test::temp_path;
-using test::trace_line;
-using test::bytes_of;
-
-
-}  // namespace
+using namespace volley::test;
 
 TEST_CASE("trace: every mode and thread count gives the same answers, and the line parses") {
   const fs::path primary = temp_path("trace_primary.vray"), shadow = temp_path("trace_shadow.vray");

@@ -19,17 +19,9 @@
 
 namespace fs = std::filesystem;
 using namespace volley;
+using namespace volley::test;
 
 namespace {
-
-using test::has;
-using test::kCornell;
-using test::Run;
-using test::run;
-using test::temp_file;
-using test::temp_path;
-using test::bytes_of;
-
 
 // A 20 x 20 floor at y = 0 seen from above, a light over it: every primary ray hits and
 // the shading normal is +y everywhere.

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/slab_grid.h"
 #include "core/bbox.h"
 #include "core/bvh.h"
 #include "core/bvh_traverse.h"
@@ -25,11 +26,7 @@
 
 namespace {
 
-using volley::core::BBox;
-using volley::core::Bvh;
-using volley::core::BvhBuildOptions;
-using volley::core::BvhNode;
-using volley::core::kBvhMaxDepth;
+using namespace volley::core;
 using Ray = volley::core::RayT<float>;
 using TriHit = volley::core::TriHit<float>;
 
@@ -77,9 +74,11 @@ Answer brute_closest(const Soup& soup, Ray ray) {
   return a;
 }
 
-Answer bvh_closest(const Bvh& bvh, const Soup& soup, const Ray& ray) {
+// The closest hit (AnyHit = false) or any hit of the BVH walk over the soup.
+template <bool AnyHit>
+Answer bvh_query(const Bvh& bvh, const Soup& soup, const Ray& ray) {
   Answer a;
-  a.hit = volley::core::traverse<false>(bvh, ray, [&](std::uint32_t prim, float& tmax) {
+  a.hit = volley::core::traverse<AnyHit>(bvh, ray, [&](std::uint32_t prim, float& tmax) {
     Ray r = ray;
     r.tmax = tmax;
     TriHit h;
@@ -92,20 +91,8 @@ Answer bvh_closest(const Bvh& bvh, const Soup& soup, const Ray& ray) {
   return a;
 }
 
-Answer bvh_any(const Bvh& bvh, const Soup& soup, const Ray& ray) {
-  Answer a;
-  a.hit = volley::core::traverse<true>(bvh, ray, [&](std::uint32_t prim, float& tmax) {
-    Ray r = ray;
-    r.tmax = tmax;
-    TriHit h;
-    if (!soup.intersect(prim, r, h)) return false;
-    tmax = h.t;
-    a.t = h.t;
-    a.prim = prim;
-    return true;
-  });
-  return a;
-}
+Answer bvh_closest(const Bvh& bvh, const Soup& soup, const Ray& ray) { return bvh_query<false>(bvh, soup, ray); }
+Answer bvh_any(const Bvh& bvh, const Soup& soup, const Ray& ray) { return bvh_query<true>(bvh, soup, ray); }
 
 std::string describe(const Ray& r) {
   char buf[256];
@@ -292,6 +279,18 @@ BBox bounds_of(const std::vector<BBox>& boxes) {
   BBox b;
   for (const BBox& x : boxes) b.extend(x);
   return b;
+}
+
+// Builds the soup's BVH, checks its structure, and checks 1000 random rays through its
+// bounds against brute force (some of them hit).
+void check_random_rays(const Soup& soup, std::mt19937& rng) {
+  const auto boxes = soup.boxes();
+  const Bvh bvh = volley::core::build_bvh(boxes);
+  check_structure(bvh, boxes, {});
+  const Agreement g = compare_with_brute_force(bvh, soup, random_rays(bounds_of(boxes), 1000, rng));
+  CHECK(g.hits > 0);
+  CHECK(g.closest_wrong == 0);
+  CHECK(g.any_wrong == 0);
 }
 
 // Tiny OBJ reader for the shared meshes: `v x y z` and `f a b c ...` lines only
@@ -497,39 +496,11 @@ TEST_CASE("bvh: closest and any hit equal brute force on random triangle soups")
 }
 
 TEST_CASE("bvh: axis-aligned rays with origins on slab planes of flat boxes (stress item 4)") {
-  // Floor: a G x G grid of unit quads at z = 0 (flat boxes). Walls: unit quads in the
-  // planes x = 4, 8, 12 and y = 4, 8, 12, z in [-2, 2]. Rays are axis-aligned (the
-  // other components ±0) with origins at integer and half-integer coordinates, so
-  // they lie exactly on the slab planes of many leaf boxes and hit shared edges and
-  // vertices, where 0 * inf = NaN decides whether a node is culled.
-  constexpr int G = 16;
+  // Rays in the slab planes of many leaf boxes, through shared edges and vertices.
   Soup soup;
-  auto quad = [&](glm::vec3 p, glm::vec3 e1, glm::vec3 e2) {
-    soup.add(p, p + e1, p + e1 + e2);
-    soup.add(p, p + e1 + e2, p + e2);
-  };
-  for (int i = 0; i < G; ++i)
-    for (int j = 0; j < G; ++j) quad({float(i), float(j), 0}, {1, 0, 0}, {0, 1, 0});
-  for (int w = 4; w < G; w += 4)
-    for (int j = 0; j < G; ++j)
-      for (int k = -2; k < 2; ++k) {
-        quad({float(w), float(j), float(k)}, {0, 1, 0}, {0, 0, 1});
-        quad({float(j), float(w), float(k)}, {1, 0, 0}, {0, 0, 1});
-      }
+  const std::vector<Ray> rays =
+      volley::test::slab_plane_grid<Ray>(16, soup, [](glm::vec3 o, glm::vec3 d) { return Ray{o, 0, d, kInf}; });
   const std::vector<BBox> boxes = soup.boxes();
-
-  std::vector<Ray> rays;
-  for (float zero : {0.0f, -0.0f})
-    for (int a = 0; a <= 2 * G; ++a)
-      for (int b = -4; b <= 4; ++b) {
-        const float x = 0.5f * a;
-        const float h = 0.5f * b;
-        rays.push_back({{x, 0.5f * (a / 2 + b + 4), 5}, 0, {zero, zero, -1}, kInf});   // down
-        rays.push_back({{x, x, 5}, 0, {zero, zero, -2}, kInf});                          // down, diagonal points
-        rays.push_back({{-1, x, h}, 0, {1, zero, zero}, kInf});                          // +x to the walls
-        rays.push_back({{x, G + 1.0f, h}, 0, {zero, -1, zero}, kInf});                   // -y to the walls
-        rays.push_back({{x, 0.5f * (b + 4), 0}, 0, {1, zero, zero}, kInf});              // in the floor plane
-      }
   for (BvhBuildOptions opt : {BvhBuildOptions{}, BvhBuildOptions{16, 1, 1, 1, 1}}) {
     const Bvh bvh = volley::core::build_bvh(boxes, opt);
     check_structure(bvh, boxes, opt);
@@ -582,13 +553,7 @@ TEST_CASE("bvh: degenerate inputs build, stay within bounds and agree with brute
         default: soup.add(p, p + 0.1f * rand3(), p + 0.1f * rand3()); break;
       }
     }
-    const auto boxes = soup.boxes();
-    const Bvh bvh = volley::core::build_bvh(boxes);
-    check_structure(bvh, boxes, {});
-    const Agreement g = compare_with_brute_force(bvh, soup, random_rays(bounds_of(boxes), 1000, rng));
-    CHECK(g.hits > 0);
-    CHECK(g.closest_wrong == 0);
-    CHECK(g.any_wrong == 0);
+    check_random_rays(soup, rng);
   }
   SUBCASE("many coincident centroids (nested triangles of every size)") {
     Soup soup;
@@ -602,13 +567,7 @@ TEST_CASE("bvh: degenerate inputs build, stay within bounds and agree with brute
       const float s = 0.01f * static_cast<float>(1 + i % 50);
       soup.add(c + glm::vec3(-s, -s, 0), c + glm::vec3(s, -s, 0), c + glm::vec3(0, s, 0) + glm::vec3(0, 0, 0.0f));
     }
-    const auto boxes = soup.boxes();
-    const Bvh bvh = volley::core::build_bvh(boxes);
-    check_structure(bvh, boxes, {});
-    const Agreement g = compare_with_brute_force(bvh, soup, random_rays(bounds_of(boxes), 1000, rng));
-    CHECK(g.hits > 0);
-    CHECK(g.closest_wrong == 0);
-    CHECK(g.any_wrong == 0);
+    check_random_rays(soup, rng);
   }
   SUBCASE("NaN and Inf vertices (empty and infinite boxes) among regular triangles") {
     Soup soup = random_soup(2000, rng);

@@ -12,11 +12,7 @@
 #include "simd/triangle/triangle_blocks.h"
 #include "simd/wide/wide_bvh.h"
 
-using volley::core::allocate_large;
-using volley::core::free_large;
-using volley::core::kLargeAllocBytes;
-using volley::core::kWalkedAllocBytes;
-using volley::core::LargeArray;
+using namespace volley::core;
 
 TEST_CASE("allocate_large: small and large sizes are aligned, writable and freed") {
   for (const std::size_t bytes : {std::size_t{1}, std::size_t{4096}, kLargeAllocBytes - 1, kLargeAllocBytes,

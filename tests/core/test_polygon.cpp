@@ -15,18 +15,13 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "common/bad_rays.h"
 #include "core/polygon.h"
 #include "core/triangle_moller.h"
 
 namespace {
 
-using volley::core::intersect_moller;
-using volley::core::intersect_polygon;
-using volley::core::make_polygon;
-using volley::core::Polygon;
-using volley::core::RayT;
-using volley::core::TriHit;
-using volley::core::Vec3;
+using namespace volley::core;
 using Vec3f = Vec3<float>;
 using Vec3d = Vec3<double>;
 using Vec2d = glm::dvec2;
@@ -408,18 +403,8 @@ TEST_CASE_TEMPLATE("polygon: bad rays and the half-open range", T, float, double
   CHECK(t == 1);
   r.tmin = 1;
   CHECK(intersect_polygon(r, square, t));
-  const T nan = std::numeric_limits<T>::quiet_NaN(), inf = std::numeric_limits<T>::infinity();
-  std::vector<RayT<T>> bad;
-  for (T x : {nan, inf, -inf}) {
-    for (int c = 0; c < 3; ++c) {
-      RayT<T> b = r;
-      b.org[c] = x;
-      bad.push_back(b);
-      b = r;
-      b.dir[c] = x;
-      bad.push_back(b);
-    }
-  }
+  const T nan = std::numeric_limits<T>::quiet_NaN();
+  std::vector<RayT<T>> bad = volley::test::non_finite_variants(r);
   RayT<T> b = r;
   b.dir = Vec3<T>(0);
   bad.push_back(b);

@@ -13,16 +13,13 @@
 #include <utility>
 #include <vector>
 
+#include "common/bad_rays.h"
 #include "core/triangle.h"
 
 namespace {
 
-using volley::TriangleTest;
-using volley::core::intersect_triangle;
-using volley::core::is_degenerate;
-using volley::core::RayT;
-using volley::core::TriHit;
-using volley::core::Vec3;
+using namespace volley;
+using namespace volley::core;
 using Vec3f = Vec3<float>;
 using Vec3d = Vec3<double>;
 
@@ -31,14 +28,7 @@ constexpr TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller,
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-std::string name(TriangleTest test) {
-  switch (test) {
-    case TriangleTest::plane: return "plane";
-    case TriangleTest::moller: return "moller";
-    case TriangleTest::watertight: return "watertight";
-  }
-  return "?";
-}
+std::string name(TriangleTest test) { return std::string(volley::to_string(test)); }
 
 struct Tri {
   Vec3f p0, p1, p2;
@@ -416,17 +406,7 @@ TEST_CASE_TEMPLATE("triangle: bad rays never hit", T, float, double) {
     REQUIRE(run(test, good, tri, h));  // the unmodified ray does hit
     CHECK(h.t == 1);
 
-    std::vector<RayT<float>> bad;
-    for (float x : {kNaN, kInf, -kInf}) {
-      for (int c = 0; c < 3; ++c) {
-        RayT<float> r = good;
-        r.org[c] = x;
-        bad.push_back(r);
-        r = good;
-        r.dir[c] = x;
-        bad.push_back(r);
-      }
-    }
+    std::vector<RayT<float>> bad = volley::test::non_finite_variants(good);
     RayT<float> r = good;
     r.dir = Vec3f(0);  // zero direction
     bad.push_back(r);

@@ -12,11 +12,8 @@
 #include "io/load_error.h"
 #include "io/obj_loader.h"
 
-using volley::io::LoadError;
-using volley::io::load_obj;
-using volley::io::SceneDesc;
-using volley::io::test::CaptureStderr;
-using volley::io::test::TempDir;
+using namespace volley::io;
+using namespace volley::io::test;
 
 namespace {
 

@@ -10,12 +10,8 @@
 #include "io/load_error.h"
 #include "io/png_writer.h"
 
-using volley::io::linear_to_srgb;
-using volley::io::LoadError;
-using volley::io::read_png_linear;
-using volley::io::srgb_to_linear;
-using volley::io::write_png;
-using volley::io::test::TempDir;
+using namespace volley::io;
+using namespace volley::io::test;
 
 TEST_CASE("png: the sRGB curve at known points, and its inverse") {
   CHECK(linear_to_srgb(0.0f) == 0.0f);

@@ -17,14 +17,9 @@
 #include "io/load_error.h"
 #include "io/ray_file.h"
 
-using volley::Hit;
-using volley::Ray;
-using volley::io::LoadError;
-using volley::io::read_hits;
-using volley::io::read_rays;
-using volley::io::write_hits;
-using volley::io::write_rays;
-using volley::io::test::TempDir;
+using namespace volley;
+using namespace volley::io;
+using namespace volley::io::test;
 
 namespace {
 

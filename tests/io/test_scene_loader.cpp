@@ -9,13 +9,8 @@
 #include "io/scene_loader.h"
 #include "io/text_file.h"
 
-using volley::io::CameraDesc;
-using volley::io::is_bare_mesh;
-using volley::io::load_scene;
-using volley::io::LoadError;
-using volley::io::SceneDesc;
-using volley::io::test::CaptureStderr;
-using volley::io::test::TempDir;
+using namespace volley::io;
+using namespace volley::io::test;
 
 namespace {
 

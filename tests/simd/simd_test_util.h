@@ -36,7 +36,11 @@ using volley::Hit;
 using volley::kInvalidPrim;
 using volley::Ray;
 using volley::TriangleTest;
+using volley::simd::HitPacket;
 using volley::simd::kLanes;
+using volley::simd::PacketKernels;
+using volley::simd::RayBlockKernels;
+using volley::simd::RayPacket;
 using V3 = volley::core::Vec3<float>;
 
 inline constexpr float kInf = std::numeric_limits<float>::infinity();

@@ -8,10 +8,6 @@
 namespace {
 
 using namespace simd_test;
-using volley::simd::HitPacket;
-using volley::simd::PacketKernels;
-using volley::simd::RayBlockKernels;
-using volley::simd::RayPacket;
 
 /// One ray x blocks, closest and any hit, against the oracle's loop over the same triangles.
 template <class Arch, TriangleTest Test>

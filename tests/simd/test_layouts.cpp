@@ -6,8 +6,6 @@
 namespace {
 
 using namespace simd_test;
-using volley::simd::HitPacket;
-using volley::simd::RayPacket;
 
 template <int K>
 void packet_round_trip() {

@@ -11,10 +11,6 @@
 namespace {
 
 using namespace simd_test;
-using volley::simd::HitPacket;
-using volley::simd::PacketKernels;
-using volley::simd::RayBlockKernels;
-using volley::simd::RayPacket;
 
 /// Rays from a few interior points of grid_box(n, offset) to every half-integer point of
 /// its faces (vertices, edge midpoints, diagonal midpoints, square centres).

@@ -13,10 +13,6 @@
 namespace {
 
 using namespace simd_test;
-using volley::simd::HitPacket;
-using volley::simd::PacketKernels;
-using volley::simd::RayBlockKernels;
-using volley::simd::RayPacket;
 using RayF = volley::core::RayT<float>;
 
 float up(float x) { return std::nextafter(x, kInf); }

@@ -24,21 +24,8 @@
 
 namespace stress {
 
-using volley::Accel;
-using volley::Hit;
-using volley::Isa;
-using volley::Ray;
-using volley::TriangleTest;
-
-using volley::accuracy::Answers;
-using volley::accuracy::kInf;
-using volley::accuracy::kModes;
-using volley::accuracy::make_ray;
-using volley::accuracy::Mesh;
-using volley::accuracy::Mode;
-using volley::accuracy::reference;
-using volley::accuracy::RefHit;
-using volley::accuracy::to_float;
+using namespace volley;
+using namespace volley::accuracy;
 
 inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 inline constexpr TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};

@@ -72,9 +72,7 @@ bool same(const std::vector<std::vector<Hit>>& a, const std::vector<std::vector<
 TEST_CASE("threads: 8 threads query one scene in every form and get the single-threaded answers") {
   const Soup soup = random_soup(3000, 71);
   const std::vector<Ray> rays = mixed_rays(40, 10.0f, 73);
-  std::vector<Isa> isas = simd_isas();
-  isas.push_back(Isa::scalar);
-  for (Isa isa : isas) {
+  for (Isa isa : all_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     const Accel accel = soup.accel(TriangleTest::watertight, isa);
     const auto want = all_forms(accel, rays, 0);
