@@ -5,7 +5,6 @@
     (scenes/fetch downloads the meshes; any .obj, .ply or scene .json will do)
 """
 import argparse
-import os
 import time
 
 import numpy as np
@@ -54,7 +53,6 @@ def main():
     hit = np.isfinite(depth)
     near, far = depth[hit].min(), depth[hit].max()
     image = np.where(hit, 1.0 - 0.8 * (depth - near) / max(far - near, 1e-12), 0.0)
-    os.makedirs(os.path.dirname(os.path.abspath(a.output)), exist_ok=True)
     write_png(a.output, image)
     print(f"{a.mesh}: {a.width}x{a.height} rays, {int(hit.sum())} hits, cast in {seconds * 1e3:.1f} ms "
           f"({rays.size // 6 / seconds / 1e6:.2f} Mrays/s) -> {a.output}")

@@ -1,5 +1,6 @@
 """A tiny PNG writer for the examples (8-bit grey or RGB from a NumPy array), so that they
 need nothing beyond NumPy."""
+import os
 import struct
 import zlib
 
@@ -7,7 +8,8 @@ import numpy as np
 
 
 def write_png(path, image):
-    """image: (H, W) or (H, W, 3) array of floats in [0, 1] or of uint8."""
+    """image: (H, W) or (H, W, 3) array of floats in [0, 1] or of uint8; the folder of
+    `path` is created when missing."""
     a = np.asarray(image)
     if a.dtype != np.uint8:
         a = (np.clip(a, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
@@ -18,6 +20,7 @@ def write_png(path, image):
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
 
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n")
         f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, color, 0, 0, 0)))

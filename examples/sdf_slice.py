@@ -8,7 +8,6 @@ The middle slice of a grid over the mesh's box (widened 10%): left, occupancy (b
 inside); right, signed distance (blue inside, red outside, white on the surface).
 """
 import argparse
-import os
 import time
 
 import numpy as np
@@ -42,7 +41,6 @@ def main():
     sdf = scene.compute_signed_distance(grid)
     seconds = time.perf_counter() - t0
     image = np.concatenate([np.repeat(1.0 - occupancy[..., None], 3, axis=2), diverging(sdf, np.abs(sdf).max())], axis=1)
-    os.makedirs(os.path.dirname(os.path.abspath(a.output)), exist_ok=True)
     write_png(a.output, image)
     print(f"{a.mesh}: {len(triangles)} triangles, {a.size}x{a.size} slice, {int(occupancy.sum())} cells inside, "
           f"occupancy + signed distance in {seconds * 1e3:.1f} ms -> {a.output}")

@@ -23,6 +23,30 @@ inline constexpr std::size_t kStreamChunk = 1024;
 /// Embree's tfar of an occluded ray.
 inline constexpr float kNegInf = -std::numeric_limits<float>::infinity();
 
+/// Calls trace(packet, b, n) for each run rays[b .. b + n) of up to 16 rays as a volley
+/// packet (lanes past the end inactive), b = 0, 16, 32, ...
+template <class Trace>
+void for_each_packet16(const std::vector<Ray>& rays, Trace&& trace) {
+  RayPacket<16> packet;
+  for (std::size_t b = 0; b < rays.size(); b += 16) {
+    const int n = int(std::min<std::size_t>(16, rays.size() - b));
+    load(packet, rays.data() + b, n);
+    trace(packet, b, n);
+  }
+}
+
+/// Calls trace(rays, b, n) for each run rays[b .. b + n) of up to kStreamChunk rays as
+/// Embree's AoS rays.
+template <class Trace>
+void for_each_embree_chunk(const std::vector<Ray>& rays, Trace&& trace) {
+  std::vector<RTCRayHit> e(kStreamChunk);
+  for (std::size_t b = 0; b < rays.size(); b += kStreamChunk) {
+    const std::size_t n = std::min(kStreamChunk, rays.size() - b);
+    for (std::size_t i = 0; i < n; ++i) to_embree(rays[b + i], e[i]);
+    trace(e.data(), b, n);
+  }
+}
+
 /// The answers of one pass: closest hits, one byte per ray for occlusion, or hits per ray
 /// (the counting modes, count_modes.h).
 struct Answers {
@@ -76,27 +100,21 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
                      });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     RayPacket<16> packet;
                      HitPacket<16> hits;
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       load(packet, rays.data() + b, n);
+                     for_each_packet16(rays, [&](const RayPacket<16>& packet, std::size_t b, int n) {
                        reset(hits);
                        accel.intersect(packet, hits);
                        store(hits, out.hits.data() + b, n);
-                     }
+                     });
                    }});
 
   modes.push_back({"stream", "rtcIntersect1M", "intersect(Ray*, n, Hit*)", false,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
                      RTCIntersectContext context = make_context(coherent);
-                     std::vector<RTCRayHit> e(kStreamChunk);
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk) {
-                       const std::size_t n = std::min(kStreamChunk, rays.size() - b);
-                       for (std::size_t i = 0; i < n; ++i) to_embree(rays[b + i], e[i]);
-                       rtcIntersect1M(scene, &context, e.data(), unsigned(n), sizeof(RTCRayHit));
+                     for_each_embree_chunk(rays, [&](RTCRayHit* e, std::size_t b, std::size_t n) {
+                       rtcIntersect1M(scene, &context, e, unsigned(n), sizeof(RTCRayHit));
                        for (std::size_t i = 0; i < n; ++i) out.hits[b + i] = from_embree(e[i]);
-                     }
+                     });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)
@@ -126,25 +144,19 @@ inline std::vector<Mode> all_modes(const EmbreeScene& embree, const Accel& accel
                      });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
-                     RayPacket<16> packet;
-                     for (std::size_t b = 0; b < rays.size(); b += 16) {
-                       const int n = int(std::min<std::size_t>(16, rays.size() - b));
-                       load(packet, rays.data() + b, n);
+                     for_each_packet16(rays, [&](const RayPacket<16>& packet, std::size_t b, int n) {
                        const std::uint32_t mask = accel.occluded(packet);
                        for (int i = 0; i < n; ++i) out.blocked[b + i] = std::uint8_t((mask >> i) & 1u);
-                     }
+                     });
                    }});
 
   modes.push_back({"occluded_stream", "rtcOccluded1M", "occluded(Ray*, n, uint8*)", true,
                    [scene, coherent](const std::vector<Ray>& rays, Answers& out) {
                      RTCIntersectContext context = make_context(coherent);
-                     std::vector<RTCRayHit> e(kStreamChunk);
-                     for (std::size_t b = 0; b < rays.size(); b += kStreamChunk) {
-                       const std::size_t n = std::min(kStreamChunk, rays.size() - b);
-                       for (std::size_t i = 0; i < n; ++i) to_embree(rays[b + i], e[i]);
+                     for_each_embree_chunk(rays, [&](RTCRayHit* e, std::size_t b, std::size_t n) {
                        rtcOccluded1M(scene, &context, &e[0].ray, unsigned(n), sizeof(RTCRayHit));
                        for (std::size_t i = 0; i < n; ++i) out.blocked[b + i] = e[i].ray.tfar == kNegInf ? 1 : 0;
-                     }
+                     });
                    },
                    [&accel](const std::vector<Ray>& rays, Answers& out) {
                      for (std::size_t b = 0; b < rays.size(); b += kStreamChunk)

@@ -8,14 +8,6 @@ namespace volley::simd {
 
 VOLLEY_DEFINE_WIDE(Avx2)  // the one table: simd/isa/kernel_table.h
 
-// Any-hit double packets (32 rays walked as one; WideAccel::occluded(RayPacket<32>)).
-template std::uint32_t WideKernels<Avx2, TriangleTest::moller, true, 32>::occluded(const View&, const RayPacket<32>&);
-template std::uint32_t WideKernels<Avx2, TriangleTest::plane, true, 32>::occluded(const View&, const RayPacket<32>&);
-template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, true, 32>::occluded(const View&,
-                                                                                    const RayPacket<32>&);
-template std::uint32_t WideKernels<Avx2, TriangleTest::moller, false, 32>::occluded(const View&, const RayPacket<32>&);
-template std::uint32_t WideKernels<Avx2, TriangleTest::plane, false, 32>::occluded(const View&, const RayPacket<32>&);
-template std::uint32_t WideKernels<Avx2, TriangleTest::watertight, false, 32>::occluded(const View&,
-                                                                                     const RayPacket<32>&);
+VOLLEY_DEFINE_WIDE_DOUBLE(Avx2)  // any-hit double packets (32 rays walked as one)
 
 }  // namespace volley::simd

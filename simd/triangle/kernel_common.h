@@ -146,37 +146,42 @@ template <class Arch>
 template <class Arch>
 inline constexpr bool kHasFma = std::is_base_of_v<xsimd::fma3<xsimd::avx2>, Arch> || kHasMaskRegisters<Arch>;
 
-/// a b + c rounded once, as std::fma: for the kernels that fuse where their oracle does.
-/// One vfmadd on AVX2 (built with -mfma) and AVX-512. Not xsimd::fma: 8.1 has none for
-/// AVX-512 and falls back to an unfused a * b + c there. Not for ISAs without FMA (SSE4.2):
-/// their kernels compute unfused, so no silent per-lane emulation can creep in.
-template <class Arch>
-FloatB<Arch> fused_mul_add(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
+/// The fused forms the kernels use: a b + c, a b - c and c - a b, each rounded once.
+enum class Fused { mul_add, mul_sub, neg_mul_add };
+
+/// One fused form, rounded once as std::fma: for the kernels that fuse where their oracle
+/// does. One vfmadd/vfmsub/vfnmadd on AVX2 (built with -mfma) and AVX-512. Not xsimd::fma:
+/// 8.1 has none for AVX-512 and falls back to an unfused a * b + c there. Not for ISAs
+/// without FMA (SSE4.2): their kernels compute unfused, so no silent per-lane emulation can
+/// creep in.
+template <Fused Form, class Arch>
+FloatB<Arch> fused(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
   static_assert(kHasFma<Arch>, "no FMA instruction on this ISA: compute unfused (see kMollerFused)");
-  if constexpr (kLanes<Arch> == 16)
-    return _mm512_fmadd_ps(a, b, c);
-  else
-    return _mm256_fmadd_ps(a, b, c);
+  if constexpr (kLanes<Arch> == 16) {
+    if constexpr (Form == Fused::mul_add) return _mm512_fmadd_ps(a, b, c);
+    if constexpr (Form == Fused::mul_sub) return _mm512_fmsub_ps(a, b, c);
+    if constexpr (Form == Fused::neg_mul_add) return _mm512_fnmadd_ps(a, b, c);
+  } else {
+    if constexpr (Form == Fused::mul_add) return _mm256_fmadd_ps(a, b, c);
+    if constexpr (Form == Fused::mul_sub) return _mm256_fmsub_ps(a, b, c);
+    if constexpr (Form == Fused::neg_mul_add) return _mm256_fnmadd_ps(a, b, c);
+  }
 }
 
+/// a b + c rounded once, as std::fma(a, b, c).
+template <class Arch>
+FloatB<Arch> fused_mul_add(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
+  return fused<Fused::mul_add, Arch>(a, b, c);
+}
 /// a b - c rounded once, as std::fma(a, b, -c).
 template <class Arch>
 FloatB<Arch> fused_mul_sub(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
-  static_assert(kHasFma<Arch>, "no FMA instruction on this ISA: compute unfused (see kMollerFused)");
-  if constexpr (kLanes<Arch> == 16)
-    return _mm512_fmsub_ps(a, b, c);
-  else
-    return _mm256_fmsub_ps(a, b, c);
+  return fused<Fused::mul_sub, Arch>(a, b, c);
 }
-
 /// c - a b rounded once, as std::fma(-a, b, c).
 template <class Arch>
 FloatB<Arch> fused_neg_mul_add(FloatB<Arch> a, FloatB<Arch> b, FloatB<Arch> c) {
-  static_assert(kHasFma<Arch>, "no FMA instruction on this ISA: compute unfused (see kMollerFused)");
-  if constexpr (kLanes<Arch> == 16)
-    return _mm512_fnmadd_ps(a, b, c);
-  else
-    return _mm256_fnmadd_ps(a, b, c);
+  return fused<Fused::neg_mul_add, Arch>(a, b, c);
 }
 
 /// Reinterprets 32-bit ids as float lanes (so that select() can carry them with t, u, v).

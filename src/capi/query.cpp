@@ -186,22 +186,45 @@ const char* why_invalid(const volley_ray& r) {
   return nullptr;
 }
 
-/// A masked stream query: the checks (nothing to do for count 0), then trace().
-template <class Out, class Trace>
-volley_status stream_masked(const char* function, const volley_scene* scene, const volley_ray* rays,
-                            const std::uint32_t* masks, std::size_t count, Out* out, const char* out_name,
-                            Trace&& trace) {
+/// A stream query: the checks (nothing to do for count 0; the masks only when Masked), then
+/// trace().
+template <bool Masked, class Out, class Trace>
+volley_status stream_query(const char* function, const volley_scene* scene, const volley_ray* rays,
+                           const std::uint32_t* masks, std::size_t count, Out* out, const char* out_name,
+                           Trace&& trace) {
   return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
     require_committed(scene);
     if (count == 0) return;
     require_pointer(rays, "rays");
-    require_pointer(masks, "masks");
+    if constexpr (Masked) require_pointer(masks, "masks");
     require_pointer(out, out_name);
     trace();
   });
 }
 
 }  // namespace
+
+/// One ray's closest hit (AnyHit false, into a volley_hit) or occlusion (into an int),
+/// through the mask when one is given; a zero direction is a miss.
+template <bool AnyHit, class Out>
+volley_status query_one(const char* function, const volley_scene* scene, const volley_ray* ray,
+                        const std::uint32_t* mask, Out* out) {
+  return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
+    require_committed(scene);
+    require_pointer(ray, "ray");
+    require_pointer(out, AnyHit ? "occluded" : "hit");
+    volley::Ray r;
+    std::memcpy(&r, ray, sizeof r);
+    const bool miss = zero_direction(r.dir);
+    if constexpr (AnyHit) {
+      *out = !miss && (mask ? scene->accel.occluded(r, *mask) : scene->accel.occluded(r)) ? 1 : 0;
+    } else {
+      const volley::Hit h = miss ? volley::Hit{} : mask ? scene->accel.intersect(r, *mask) : scene->accel.intersect(r);
+      std::memcpy(out, &h, sizeof h);
+    }
+  });
+}
+
 }  // namespace volley::capi
 
 using namespace volley::capi;
@@ -209,133 +232,67 @@ using namespace volley::capi;
 extern "C" {
 
 volley_status volley_intersect1(const volley_scene* scene, const volley_ray* ray, volley_hit* hit) {
-  return guarded("volley_intersect1", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    require_pointer(ray, "ray");
-    require_pointer(hit, "hit");
-    volley::Ray r;
-    std::memcpy(&r, ray, sizeof r);
-    const volley::Hit h = zero_direction(r.dir) ? volley::Hit{} : scene->accel.intersect(r);
-    std::memcpy(hit, &h, sizeof h);
-  });
+  return query_one<false>("volley_intersect1", scene, ray, nullptr, hit);
 }
 
 volley_status volley_occluded1(const volley_scene* scene, const volley_ray* ray, int* occluded) {
-  return guarded("volley_occluded1", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    require_pointer(ray, "ray");
-    require_pointer(occluded, "occluded");
-    volley::Ray r;
-    std::memcpy(&r, ray, sizeof r);
-    *occluded = !zero_direction(r.dir) && scene->accel.occluded(r) ? 1 : 0;
-  });
+  return query_one<true>("volley_occluded1", scene, ray, nullptr, occluded);
 }
 
-volley_status volley_intersect4(const volley_scene* scene, const volley_ray_packet4* rays, volley_hit_packet4* hits) {
-  return intersect_packet<4>("volley_intersect4", scene, rays, hits);
-}
-volley_status volley_intersect8(const volley_scene* scene, const volley_ray_packet8* rays, volley_hit_packet8* hits) {
-  return intersect_packet<8>("volley_intersect8", scene, rays, hits);
-}
-volley_status volley_intersect16(const volley_scene* scene, const volley_ray_packet16* rays,
-                                 volley_hit_packet16* hits) {
-  return intersect_packet<16>("volley_intersect16", scene, rays, hits);
-}
+// The packet entry points of one width: C spells each width out in the names, one template
+// per query answers them all.
+#define VOLLEY_PACKET_ENTRIES(K)                                                                                   \
+  volley_status volley_intersect##K(const volley_scene* scene, const volley_ray_packet##K* rays,                    \
+                                    volley_hit_packet##K* hits) {                                                   \
+    return intersect_packet<K>("volley_intersect" #K, scene, rays, hits);                                           \
+  }                                                                                                                 \
+  volley_status volley_occluded##K(const volley_scene* scene, const volley_ray_packet##K* rays, uint32_t* occluded) { \
+    return occluded_packet<K>("volley_occluded" #K, scene, rays, occluded);                                         \
+  }                                                                                                                 \
+  void volley_reset_hits##K(volley_hit_packet##K* hits) { reset_hits(hits); }                                      \
+  volley_status volley_intersect##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,           \
+                                             const uint32_t* masks, volley_hit_packet##K* hits) {                   \
+    return intersect_packet<K>("volley_intersect" #K "_masked", scene, rays, hits, true, masks);                    \
+  }                                                                                                                 \
+  volley_status volley_occluded##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,            \
+                                            const uint32_t* masks, uint32_t* occluded) {                            \
+    return occluded_packet<K>("volley_occluded" #K "_masked", scene, rays, occluded, true, masks);                  \
+  }
 
-volley_status volley_occluded4(const volley_scene* scene, const volley_ray_packet4* rays, uint32_t* occluded) {
-  return occluded_packet<4>("volley_occluded4", scene, rays, occluded);
-}
-volley_status volley_occluded8(const volley_scene* scene, const volley_ray_packet8* rays, uint32_t* occluded) {
-  return occluded_packet<8>("volley_occluded8", scene, rays, occluded);
-}
-volley_status volley_occluded16(const volley_scene* scene, const volley_ray_packet16* rays, uint32_t* occluded) {
-  return occluded_packet<16>("volley_occluded16", scene, rays, occluded);
-}
-
-void volley_reset_hits4(volley_hit_packet4* hits) { reset_hits(hits); }
-void volley_reset_hits8(volley_hit_packet8* hits) { reset_hits(hits); }
-void volley_reset_hits16(volley_hit_packet16* hits) { reset_hits(hits); }
+VOLLEY_PACKET_ENTRIES(4)
+VOLLEY_PACKET_ENTRIES(8)
+VOLLEY_PACKET_ENTRIES(16)
 
 volley_status volley_intersect_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                       volley_hit* hits) {
-  return guarded("volley_intersect_stream", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    if (count == 0) return;
-    require_pointer(rays, "rays");
-    require_pointer(hits, "hits");
-    scene->accel.intersect(as_cpp(rays), count, as_cpp(hits));
-  });
+  return stream_query<false>("volley_intersect_stream", scene, rays, nullptr, count, hits, "hits",
+                             [&] { scene->accel.intersect(as_cpp(rays), count, as_cpp(hits)); });
 }
 
 volley_status volley_occluded_stream(const volley_scene* scene, const volley_ray* rays, size_t count,
                                      uint8_t* occluded) {
-  return guarded("volley_occluded_stream", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    if (count == 0) return;
-    require_pointer(rays, "rays");
-    require_pointer(occluded, "occluded");
-    scene->accel.occluded(as_cpp(rays), count, occluded);
-  });
+  return stream_query<false>("volley_occluded_stream", scene, rays, nullptr, count, occluded, "occluded",
+                             [&] { scene->accel.occluded(as_cpp(rays), count, occluded); });
 }
 
 volley_status volley_intersect1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask,
                                        volley_hit* hit) {
-  return guarded("volley_intersect1_masked", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    require_pointer(ray, "ray");
-    require_pointer(hit, "hit");
-    volley::Ray r;
-    std::memcpy(&r, ray, sizeof r);
-    const volley::Hit h = zero_direction(r.dir) ? volley::Hit{} : scene->accel.intersect(r, mask);
-    std::memcpy(hit, &h, sizeof h);
-  });
+  return query_one<false>("volley_intersect1_masked", scene, ray, &mask, hit);
 }
 
 volley_status volley_occluded1_masked(const volley_scene* scene, const volley_ray* ray, uint32_t mask, int* occluded) {
-  return guarded("volley_occluded1_masked", VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    require_pointer(ray, "ray");
-    require_pointer(occluded, "occluded");
-    volley::Ray r;
-    std::memcpy(&r, ray, sizeof r);
-    *occluded = !zero_direction(r.dir) && scene->accel.occluded(r, mask) ? 1 : 0;
-  });
-}
-
-volley_status volley_intersect4_masked(const volley_scene* scene, const volley_ray_packet4* rays, const uint32_t* masks,
-                                       volley_hit_packet4* hits) {
-  return intersect_packet<4>("volley_intersect4_masked", scene, rays, hits, true, masks);
-}
-volley_status volley_intersect8_masked(const volley_scene* scene, const volley_ray_packet8* rays, const uint32_t* masks,
-                                       volley_hit_packet8* hits) {
-  return intersect_packet<8>("volley_intersect8_masked", scene, rays, hits, true, masks);
-}
-volley_status volley_intersect16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
-                                        const uint32_t* masks, volley_hit_packet16* hits) {
-  return intersect_packet<16>("volley_intersect16_masked", scene, rays, hits, true, masks);
-}
-volley_status volley_occluded4_masked(const volley_scene* scene, const volley_ray_packet4* rays, const uint32_t* masks,
-                                      uint32_t* occluded) {
-  return occluded_packet<4>("volley_occluded4_masked", scene, rays, occluded, true, masks);
-}
-volley_status volley_occluded8_masked(const volley_scene* scene, const volley_ray_packet8* rays, const uint32_t* masks,
-                                      uint32_t* occluded) {
-  return occluded_packet<8>("volley_occluded8_masked", scene, rays, occluded, true, masks);
-}
-volley_status volley_occluded16_masked(const volley_scene* scene, const volley_ray_packet16* rays,
-                                       const uint32_t* masks, uint32_t* occluded) {
-  return occluded_packet<16>("volley_occluded16_masked", scene, rays, occluded, true, masks);
+  return query_one<true>("volley_occluded1_masked", scene, ray, &mask, occluded);
 }
 
 volley_status volley_intersect_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                              size_t count, volley_hit* hits) {
-  return stream_masked("volley_intersect_stream_masked", scene, rays, masks, count, hits, "hits",
+  return stream_query<true>("volley_intersect_stream_masked", scene, rays, masks, count, hits, "hits",
                        [&] { scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits)); });
 }
 
 volley_status volley_occluded_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                             size_t count, uint8_t* occluded) {
-  return stream_masked("volley_occluded_stream_masked", scene, rays, masks, count, occluded, "occluded",
+  return stream_query<true>("volley_occluded_stream_masked", scene, rays, masks, count, occluded, "occluded",
                        [&] { scene->accel.occluded(as_cpp(rays), masks, count, occluded); });
 }
 

@@ -189,6 +189,12 @@ void check_save_load(void) {
   remove(path);
 }
 
+/* Commits the scene (watertight, the default ISA) and traces one ray, both expected to succeed. */
+static void commit_and_intersect(volley_scene* scene, const volley_ray* r, volley_hit* h) {
+  expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
+  expect(volley_intersect1(scene, r, h), VOLLEY_OK, "volley_intersect1");
+}
+
 /* Geometries: a disabled one is left out from the next commit until it is enabled again;
  * ids no add call returned are argument errors. */
 void check_geometries(void) {
@@ -197,19 +203,16 @@ void check_geometries(void) {
   volley_hit h;
   volley_scene_info info;
   r.org[0] = 0.5f, r.org[1] = 0.25f; /* over the table (geometry 1), which lies on the floor (0) */
-  expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
-  expect(volley_intersect1(scene, &r, &h), VOLLEY_OK, "volley_intersect1");
+  commit_and_intersect(scene, &r, &h);
   check(h.geom == 1 && h.prim == 0 && h.inst == VOLLEY_INVALID_ID, "hit on the table", (int)h.geom);
   expect(volley_scene_disable_geometry(scene, 1), VOLLEY_OK, "volley_scene_disable_geometry");
   expect(volley_intersect1(scene, &r, &h), VOLLEY_ERROR_NOT_COMMITTED, "volley_intersect1");
-  expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
-  expect(volley_intersect1(scene, &r, &h), VOLLEY_OK, "volley_intersect1");
+  commit_and_intersect(scene, &r, &h);
   check(h.geom == 0 && h.prim == 0, "the table disabled: the floor", (int)h.geom);
   expect(volley_scene_get_info(scene, &info), VOLLEY_OK, "volley_scene_get_info");
   check(info.geometries == 3 && info.disabled == 1, "info: 3 geometries, 1 disabled", (int)info.disabled);
   expect(volley_scene_enable_geometry(scene, 1), VOLLEY_OK, "volley_scene_enable_geometry");
-  expect(volley_scene_commit(scene, VOLLEY_TEST_WATERTIGHT, VOLLEY_ISA_AUTO), VOLLEY_OK, "volley_scene_commit");
-  expect(volley_intersect1(scene, &r, &h), VOLLEY_OK, "volley_intersect1");
+  commit_and_intersect(scene, &r, &h);
   check(h.geom == 1, "the table enabled again", (int)h.geom);
   expect(volley_scene_disable_geometry(scene, 3), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_disable_geometry");
   expect(volley_scene_enable_geometry(scene, VOLLEY_INVALID_ID), VOLLEY_ERROR_INVALID_ARGUMENT,

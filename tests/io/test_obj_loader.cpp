@@ -26,6 +26,12 @@ SceneDesc load(const std::filesystem::path& file, const glm::mat4& transform = k
   return scene;
 }
 
+/// The OBJ text, written to a file of its own, loaded.
+SceneDesc load_text(std::string_view obj, const glm::mat4& transform = kIdentity) {
+  TempDir dir;
+  return load(dir.write("text.obj", obj), transform);
+}
+
 bool near(const glm::vec3& a, const glm::vec3& b, float eps = 1e-6f) { return glm::length(a - b) <= eps; }
 
 }  // namespace
@@ -80,33 +86,21 @@ TEST_CASE("obj: negative indices, CRLF line ends, tabs, comments after data, w a
 }
 
 TEST_CASE("obj: corner normals in corner order, v/vt/vn, renormalized, zero normal falls back") {
-  TempDir dir;
-  const auto file = dir.write("n.obj",
-                              "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
-                              "vt 0 0\n"
-                              "vn 0 0 2\nvn 0 1 0\nvn 1 0 0\nvn 0 0 0\n"
-                              "f 1/1/1 2/1/2 3/1/3 4/1/4\n");
-  const SceneDesc s = load(file);
+  const SceneDesc s = load_text(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "vt 0 0\n"
+      "vn 0 0 2\nvn 0 1 0\nvn 1 0 0\nvn 0 0 0\n"
+      "f 1/1/1 2/1/2 3/1/3 4/1/4\n");
   REQUIRE(s.mesh.triangle_count() == 2);
-  REQUIRE(s.mesh.corner_normals.size() == 6);
   // Triangle 0 = corners 1 2 3, triangle 1 = corners 1 3 4 (vn 4 is zero: geometric +z).
-  CHECK(s.mesh.corner_normals[0] == glm::vec3(0, 0, 1));
-  CHECK(s.mesh.corner_normals[1] == glm::vec3(0, 1, 0));
-  CHECK(s.mesh.corner_normals[2] == glm::vec3(1, 0, 0));
-  CHECK(s.mesh.corner_normals[3] == glm::vec3(0, 0, 1));
-  CHECK(s.mesh.corner_normals[4] == glm::vec3(1, 0, 0));
-  CHECK(s.mesh.corner_normals[5] == glm::vec3(0, 0, 1));
+  const std::vector<glm::vec3> want = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {1, 0, 0}, {0, 0, 1}};
+  CHECK(s.mesh.corner_normals == want);
 }
 
 TEST_CASE("obj: transform maps positions, the inverse transpose maps normals") {
-  TempDir dir;
-  const auto file = dir.write("t.obj",
-                              "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
-                              "vn 1 1 0\n"
-                              "f 1//1 2//1 3//1\n");
   const glm::mat4 m = glm::translate(glm::mat4(1.0f), glm::vec3(10, 0, 0)) *
                       glm::scale(glm::mat4(1.0f), glm::vec3(2, 1, 1));
-  const SceneDesc s = load(file, m);
+  const SceneDesc s = load_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1 1 0\nf 1//1 2//1 3//1\n", m);
   CHECK(s.mesh.positions[1] == glm::vec3(12, 0, 0));
   CHECK(s.mesh.positions[2] == glm::vec3(10, 1, 0));
   // Non-uniform scale: the normal of the plane x + y = c becomes (0.5, 1, 0) renormalized.
