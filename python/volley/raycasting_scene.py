@@ -259,10 +259,7 @@ class RaycastingScene:
         triangles counted once (with the default watertight test).
 
         Args:
-            rays: (..., 6) origin and direction.
-            nthreads: 0 (default) for all cores, or a thread count.
-            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
-                geometries whose mask (set_geometry_mask) shares a bit with its own.
+            rays, nthreads, masks: as in cast_rays.
 
         Returns:
             (...) int32.
@@ -274,10 +271,7 @@ class RaycastingScene:
         """Every hit along each ray, nearest first.
 
         Args:
-            rays: (..., 6) origin and direction.
-            nthreads: 0 (default) for all cores, or a thread count.
-            masks: (keyword only) one 32-bit mask per ray, shape (...): a ray sees the
-                geometries whose mask (set_geometry_mask) shares a bit with its own.
+            rays, nthreads, masks: as in cast_rays.
 
         Returns:
             dict of ray_splits (rays + 1,) uint32 (ray i's hits are ray_splits[i] to

@@ -45,28 +45,28 @@
 // The wide BVH's walks (WideKernels<Arch, Test, Robust>, wide/wide_traverse.h) of one arch,
 // every triangle test, with the padded slab test (Options::robust) and without it (the fast
 // path, and the mutation tests): defined in simd/isa/wide_isa_*.cpp.
-#define VOLLEY_WIDE_ROW(prefix, Arch)                                     \
-  prefix template struct WideKernels<Arch, TriangleTest::moller>;         \
-  prefix template struct WideKernels<Arch, TriangleTest::plane>;          \
-  prefix template struct WideKernels<Arch, TriangleTest::watertight>;     \
-  prefix template struct WideKernels<Arch, TriangleTest::moller, false>;  \
-  prefix template struct WideKernels<Arch, TriangleTest::plane, false>;   \
+#define VOLLEY_WIDE_ROW(prefix, Arch)                                    \
+  prefix template struct WideKernels<Arch, TriangleTest::moller>;        \
+  prefix template struct WideKernels<Arch, TriangleTest::plane>;         \
+  prefix template struct WideKernels<Arch, TriangleTest::watertight>;    \
+  prefix template struct WideKernels<Arch, TriangleTest::moller, false>; \
+  prefix template struct WideKernels<Arch, TriangleTest::plane, false>;  \
   prefix template struct WideKernels<Arch, TriangleTest::watertight, false>;
 // Any-hit double packets (32 rays walked as one; WideAccel::occluded(RayPacket<32>)): the
 // entry alone, AVX2's only.
 #define VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, Test, Robust) \
   prefix template std::uint32_t WideKernels<Arch, Test, Robust, 32>::occluded(const View&, const RayPacket<32>&);
-#define VOLLEY_WIDE_DOUBLE_ROW(prefix, Arch)                                \
-  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::moller, true)          \
-  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::plane, true)           \
-  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::watertight, true)      \
-  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::moller, false)         \
-  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::plane, false)          \
+#define VOLLEY_WIDE_DOUBLE_ROW(prefix, Arch)                           \
+  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::moller, true)     \
+  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::plane, true)      \
+  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::watertight, true) \
+  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::moller, false)    \
+  VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::plane, false)     \
   VOLLEY_WIDE_DOUBLE_ONE(prefix, Arch, TriangleTest::watertight, false)
 #define VOLLEY_DEFINE_WIDE(Arch) VOLLEY_WIDE_ROW(, Arch)
 #define VOLLEY_DEFINE_WIDE_DOUBLE(Arch) VOLLEY_WIDE_DOUBLE_ROW(, Arch)
 
 // Every wide walk of every ISA declared extern (wide/wide_traverse.h).
-#define VOLLEY_DECLARE_ALL_WIDE()                                                            \
-  VOLLEY_WIDE_ROW(extern, Sse42) VOLLEY_WIDE_ROW(extern, Avx2) VOLLEY_WIDE_DOUBLE_ROW(extern, Avx2) \
-  VOLLEY_WIDE_ROW(extern, Avx512)
+#define VOLLEY_DECLARE_ALL_WIDE() \
+  VOLLEY_WIDE_ROW(extern, Sse42)  \
+  VOLLEY_WIDE_ROW(extern, Avx2) VOLLEY_WIDE_DOUBLE_ROW(extern, Avx2) VOLLEY_WIDE_ROW(extern, Avx512)

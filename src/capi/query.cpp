@@ -128,37 +128,28 @@ auto with_zero_lanes_dropped(const RayPacket<K>& rays, Trace&& trace) {
   return trace(static_cast<const RayPacket<K>&>(copy));
 }
 
-/// A packet query; `masked`: the form with a mask per lane (masks must not be NULL).
-template <int K>
-volley_status intersect_packet(const char* function, const volley_scene* scene, const typename CTypes<K>::Rays* rays,
-                               typename CTypes<K>::Hits* hits, bool masked = false,
-                               const std::uint32_t* masks = nullptr) {
+/// A packet's closest hits (AnyHit false, into the hit packet) or occlusion bits (into a
+/// uint32_t); `masks`: the form with a mask per lane (masks must not be NULL).
+template <int K, bool AnyHit, class Out>
+volley_status query_packet(const char* function, const volley_scene* scene, const typename CTypes<K>::Rays* rays,
+                           Out* out, bool masked = false, const std::uint32_t* masks = nullptr) {
   return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
     require_committed(scene);
     require_pointer(rays, "rays");
     if (masked) require_pointer(masks, "masks");
-    require_pointer(hits, "hits");
+    require_pointer(out, AnyHit ? "occluded" : "hits");
     require_aligned(rays, "rays");
-    require_aligned(hits, "hits");
-    HitPacket<K>& out = as_cpp<K>(hits);
-    with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
-      masked ? scene->accel.intersect(p, out, masks) : scene->accel.intersect(p, out);
-    });
-  });
-}
-
-template <int K>
-volley_status occluded_packet(const char* function, const volley_scene* scene, const typename CTypes<K>::Rays* rays,
-                              std::uint32_t* occluded, bool masked = false, const std::uint32_t* masks = nullptr) {
-  return guarded(function, VOLLEY_ERROR_INTERNAL, [&] {
-    require_committed(scene);
-    require_pointer(rays, "rays");
-    if (masked) require_pointer(masks, "masks");
-    require_pointer(occluded, "occluded");
-    require_aligned(rays, "rays");
-    *occluded = with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
-      return masked ? scene->accel.occluded(p, masks) : scene->accel.occluded(p);
-    });
+    if constexpr (AnyHit) {
+      *out = with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
+        return masked ? scene->accel.occluded(p, masks) : scene->accel.occluded(p);
+      });
+    } else {
+      require_aligned(out, "hits");
+      HitPacket<K>& hits = as_cpp<K>(out);
+      with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
+        masked ? scene->accel.intersect(p, hits, masks) : scene->accel.intersect(p, hits);
+      });
+    }
   });
 }
 
@@ -241,22 +232,22 @@ volley_status volley_occluded1(const volley_scene* scene, const volley_ray* ray,
 
 // The packet entry points of one width: C spells each width out in the names, one template
 // per query answers them all.
-#define VOLLEY_PACKET_ENTRIES(K)                                                                                   \
-  volley_status volley_intersect##K(const volley_scene* scene, const volley_ray_packet##K* rays,                    \
-                                    volley_hit_packet##K* hits) {                                                   \
-    return intersect_packet<K>("volley_intersect" #K, scene, rays, hits);                                           \
-  }                                                                                                                 \
+#define VOLLEY_PACKET_ENTRIES(K)                                                                                      \
+  volley_status volley_intersect##K(const volley_scene* scene, const volley_ray_packet##K* rays,                      \
+                                    volley_hit_packet##K* hits) {                                                     \
+    return query_packet<K, false>("volley_intersect" #K, scene, rays, hits);                                          \
+  }                                                                                                                   \
   volley_status volley_occluded##K(const volley_scene* scene, const volley_ray_packet##K* rays, uint32_t* occluded) { \
-    return occluded_packet<K>("volley_occluded" #K, scene, rays, occluded);                                         \
-  }                                                                                                                 \
-  void volley_reset_hits##K(volley_hit_packet##K* hits) { reset_hits(hits); }                                      \
-  volley_status volley_intersect##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,           \
-                                             const uint32_t* masks, volley_hit_packet##K* hits) {                   \
-    return intersect_packet<K>("volley_intersect" #K "_masked", scene, rays, hits, true, masks);                    \
-  }                                                                                                                 \
-  volley_status volley_occluded##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,            \
-                                            const uint32_t* masks, uint32_t* occluded) {                            \
-    return occluded_packet<K>("volley_occluded" #K "_masked", scene, rays, occluded, true, masks);                  \
+    return query_packet<K, true>("volley_occluded" #K, scene, rays, occluded);                                        \
+  }                                                                                                                   \
+  void volley_reset_hits##K(volley_hit_packet##K* hits) { reset_hits(hits); }                                         \
+  volley_status volley_intersect##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,             \
+                                             const uint32_t* masks, volley_hit_packet##K* hits) {                     \
+    return query_packet<K, false>("volley_intersect" #K "_masked", scene, rays, hits, true, masks);                   \
+  }                                                                                                                   \
+  volley_status volley_occluded##K##_masked(const volley_scene* scene, const volley_ray_packet##K* rays,              \
+                                            const uint32_t* masks, uint32_t* occluded) {                              \
+    return query_packet<K, true>("volley_occluded" #K "_masked", scene, rays, occluded, true, masks);                 \
   }
 
 VOLLEY_PACKET_ENTRIES(4)
@@ -287,13 +278,13 @@ volley_status volley_occluded1_masked(const volley_scene* scene, const volley_ra
 volley_status volley_intersect_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                              size_t count, volley_hit* hits) {
   return stream_query<true>("volley_intersect_stream_masked", scene, rays, masks, count, hits, "hits",
-                       [&] { scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits)); });
+                            [&] { scene->accel.intersect(as_cpp(rays), masks, count, as_cpp(hits)); });
 }
 
 volley_status volley_occluded_stream_masked(const volley_scene* scene, const volley_ray* rays, const uint32_t* masks,
                                             size_t count, uint8_t* occluded) {
   return stream_query<true>("volley_occluded_stream_masked", scene, rays, masks, count, occluded, "occluded",
-                       [&] { scene->accel.occluded(as_cpp(rays), masks, count, occluded); });
+                            [&] { scene->accel.occluded(as_cpp(rays), masks, count, occluded); });
 }
 
 volley_status volley_geometric_normal(const volley_scene* scene, const volley_hit* hit, float normal[3]) {

@@ -13,8 +13,11 @@ struct Name {
 
 constexpr Name<TriangleTest> kTriangleTests[] = {
     {TriangleTest::plane, "plane"}, {TriangleTest::moller, "moller"}, {TriangleTest::watertight, "watertight"}};
-constexpr Name<Isa> kIsas[] = {{Isa::automatic, "auto"}, {Isa::scalar, "scalar"}, {Isa::sse42, "sse4.2"},
-                               {Isa::avx2, "avx2"},      {Isa::avx512, "avx512"}};
+constexpr Name<Isa> kIsas[] = {{Isa::automatic, "auto"},
+                               {Isa::scalar, "scalar"},
+                               {Isa::sse42, "sse4.2"},
+                               {Isa::avx2, "avx2"},
+                               {Isa::avx512, "avx512"}};
 constexpr Name<BuildQuality> kBuildQualities[] = {{BuildQuality::medium, "medium"}, {BuildQuality::high, "high"}};
 
 template <class E, std::size_t N>

@@ -53,6 +53,18 @@ inline std::vector<Isa> all_isas() {
   return out;
 }
 
+/// Calls f(isa, test) for every ISA of all_isas() and every triangle test, both named in
+/// any failure.
+template <class F>
+void for_each_isa_and_test(F&& f) {
+  for (Isa isa : all_isas())
+    for (TriangleTest test : kTests) {
+      CAPTURE(std::string(volley::to_string(isa)));
+      CAPTURE(std::string(volley::to_string(test)));
+      f(isa, test);
+    }
+}
+
 /// Triangles as packed xyz (9 floats each), with an indexed form for Accel.
 struct Soup {
   std::vector<float> xyz;

@@ -83,53 +83,48 @@ std::vector<Ray> aimed_rays(const accel_test::Soup& soup, std::uint32_t seed) {
 
 TEST_CASE("instances: answers of the flattened scene, every query form, every ISA and test") {
   const accel_test::Soup soup = accel_test::random_soup(200, 77), other = accel_test::random_soup(100, 78);
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
-    for (TriangleTest test : accel_test::kTests) {
-      CAPTURE(std::string(volley::to_string(isa)));
-      CAPTURE(std::string(volley::to_string(test)));
-      Accel prototype;
-      add_soup(prototype, soup);
-      prototype.commit({test, isa});
-      // The scene: a geometry of its own (id 0), then the instances (ids 1 ..).
-      Accel scene, flat;
-      add_soup(scene, other);
-      add_soup(flat, other);
-      for (const std::vector<float>& m : placements()) {
-        scene.add_instance(prototype, m.data());
-        accel_test::Soup placed;
-        for (std::size_t t = 0; t < soup.size(); ++t)
-          placed.add(apply(m, soup.vertex(t, 0)), apply(m, soup.vertex(t, 1)), apply(m, soup.vertex(t, 2)));
-        add_soup(flat, placed);
-      }
-      scene.commit({test, isa});
-      flat.commit({test, isa});
-      CHECK(scene.info().instances == placements().size());
-      CHECK(scene.info().instanced_triangles == placements().size() * soup.size());
-
-      const std::vector<Ray> rays = aimed_rays(soup, 5);
-      std::vector<Hit> single(rays.size());
-      int differ = 0, hits = 0, through = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        const Hit h = single[i] = scene.intersect(rays[i]);
-        const Hit f = flat.intersect(rays[i]);
-        hits += h.hit();
-        // The same triangle: an instance hit names it by instance, geometry 0, prim; the
-        // flattened scene by geometry 1 + instance order.
-        const bool via = h.inst != kInvalidId;
-        through += via;
-        const std::uint32_t geom = via ? h.inst : h.geom;
-        const bool same = h.hit() == f.hit() && (!h.hit() || (geom == f.geom && h.prim == f.prim &&
-                                                              std::fabs(h.t - f.t) <= 1e-4f * f.t));
-        if (via) CHECK(h.geom == 0);
-        differ += !same;
-      }
-      CHECK(hits > int(rays.size()) * 3 / 4);
-      CHECK(through > int(rays.size()) / 2);
-      CHECK(differ <= int(rays.size()) / 200);  // near-ties between triangles may go either way
-      report(check_forms(scene, rays, single, 11), "instanced scene: forms against single rays");
+  accel_test::for_each_isa_and_test([&](Isa isa, TriangleTest test) {
+    Accel prototype;
+    add_soup(prototype, soup);
+    prototype.commit({test, isa});
+    // The scene: a geometry of its own (id 0), then the instances (ids 1 ..).
+    Accel scene, flat;
+    add_soup(scene, other);
+    add_soup(flat, other);
+    for (const std::vector<float>& m : placements()) {
+      scene.add_instance(prototype, m.data());
+      accel_test::Soup placed;
+      for (std::size_t t = 0; t < soup.size(); ++t)
+        placed.add(apply(m, soup.vertex(t, 0)), apply(m, soup.vertex(t, 1)), apply(m, soup.vertex(t, 2)));
+      add_soup(flat, placed);
     }
-  }
+    scene.commit({test, isa});
+    flat.commit({test, isa});
+    CHECK(scene.info().instances == placements().size());
+    CHECK(scene.info().instanced_triangles == placements().size() * soup.size());
+
+    const std::vector<Ray> rays = aimed_rays(soup, 5);
+    std::vector<Hit> single(rays.size());
+    int differ = 0, hits = 0, through = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit h = single[i] = scene.intersect(rays[i]);
+      const Hit f = flat.intersect(rays[i]);
+      hits += h.hit();
+      // The same triangle: an instance hit names it by instance, geometry 0, prim; the
+      // flattened scene by geometry 1 + instance order.
+      const bool via = h.inst != kInvalidId;
+      through += via;
+      const std::uint32_t geom = via ? h.inst : h.geom;
+      const bool same = h.hit() == f.hit() &&
+                        (!h.hit() || (geom == f.geom && h.prim == f.prim && std::fabs(h.t - f.t) <= 1e-4f * f.t));
+      if (via) CHECK(h.geom == 0);
+      differ += !same;
+    }
+    CHECK(hits > int(rays.size()) * 3 / 4);
+    CHECK(through > int(rays.size()) / 2);
+    CHECK(differ <= int(rays.size()) / 200);  // near-ties between triangles may go either way
+    report(check_forms(scene, rays, single, 11), "instanced scene: forms against single rays");
+  });
 }
 
 TEST_CASE("instances: camera packets with spread origins (the top level's frustum walk) answer as single rays") {
@@ -151,8 +146,7 @@ TEST_CASE("instances: camera packets with spread origins (the top level's frustu
           orthographic.push_back(Ray{{p.x, p.y, p.z}, 0.0f, {0.05f, 0.03f, -1.0f}, INFINITY});
         }
   rays.insert(rays.end(), orthographic.begin(), orthographic.end());
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
+  for (Isa isa : accel_test::all_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     const Accel prototype = prototype_of(soup, isa);
     Accel scene;
@@ -174,8 +168,7 @@ TEST_CASE("instances: masked packets and streams answer as masked single rays, e
   // The packet walk of the top level takes each lane's mask to the layers and to the
   // prototypes its lanes reach (full and partial packets).
   const accel_test::Soup soup = accel_test::random_soup(200, 91), own = accel_test::random_soup(60, 92);
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
+  for (Isa isa : accel_test::all_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     const Accel prototype = prototype_of(soup, isa);
     Accel scene;

@@ -80,50 +80,45 @@ void check_packets(const Accel& accel, const std::vector<Ray>& rays, const std::
 TEST_CASE("masks: a ray sees the geometries its mask shares a bit with, every ISA, test and query form") {
   const MaskedScene scene;
   const std::vector<Ray> rays = accel_test::mixed_rays(40, 12.0f, 3);
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
-    for (TriangleTest test : accel_test::kTests) {
-      CAPTURE(std::string(volley::to_string(isa)));
-      CAPTURE(std::string(volley::to_string(test)));
-      const Accel masked = scene.make({test, isa});
-      CHECK(masked.info().layers == 4);  // 0xffffffff, 0x3, 0x2, 0x1 (0 is in none)
-      // Every ray with every mask: the answers of the scene with the others disabled.
-      std::vector<std::uint32_t> masks(rays.size());
-      std::vector<Hit> want(rays.size());
-      std::mt19937 rng(17);
-      for (std::size_t i = 0; i < rays.size(); ++i) masks[i] = kRayMasks[rng() % std::size(kRayMasks)];
-      std::size_t hits = 0;
-      for (const std::uint32_t m : kRayMasks) {
-        const Accel only = scene.make({test, isa}, &m);
-        for (std::size_t i = 0; i < rays.size(); ++i)
-          if (masks[i] == m) hits += (want[i] = only.intersect(rays[i])).hit();
-      }
-      CHECK(hits > rays.size() / 5);
-      accel_test::FormCheck c;
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        c.single += !agree(masked.intersect(rays[i], masks[i]), want[i]);
-        c.occluded += masked.occluded(rays[i], masks[i]) != want[i].hit();
-      }
-      check_packets<4>(masked, rays, masks, want, rng, c);
-      check_packets<8>(masked, rays, masks, want, rng, c);
-      check_packets<16>(masked, rays, masks, want, rng, c);
-      std::vector<Hit> stream(rays.size());
-      std::vector<std::uint8_t> blocked(rays.size());
-      masked.intersect(rays.data(), masks.data(), rays.size(), stream.data());
-      masked.occluded(rays.data(), masks.data(), rays.size(), blocked.data());
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        c.stream += !agree(stream[i], want[i]);
-        c.stream_occluded += blocked[i] != (want[i].hit() ? 1 : 0);
-      }
-      report(c, "masked forms against the scene with the hidden geometries disabled");
-      // The forms without a mask (full packets among them: every layer without a copy):
-      // every geometry but the mask-0 one.
-      const Accel all = scene.make({test, isa}, &kMaskAll);
-      std::vector<Hit> want_all(rays.size());
-      for (std::size_t i = 0; i < rays.size(); ++i) want_all[i] = all.intersect(rays[i]);
-      report(accel_test::check_forms(masked, rays, want_all, 5), "forms without a mask against the scene of mask ~0");
+  accel_test::for_each_isa_and_test([&](Isa isa, TriangleTest test) {
+    const Accel masked = scene.make({test, isa});
+    CHECK(masked.info().layers == 4);  // 0xffffffff, 0x3, 0x2, 0x1 (0 is in none)
+    // Every ray with every mask: the answers of the scene with the others disabled.
+    std::vector<std::uint32_t> masks(rays.size());
+    std::vector<Hit> want(rays.size());
+    std::mt19937 rng(17);
+    for (std::size_t i = 0; i < rays.size(); ++i) masks[i] = kRayMasks[rng() % std::size(kRayMasks)];
+    std::size_t hits = 0;
+    for (const std::uint32_t m : kRayMasks) {
+      const Accel only = scene.make({test, isa}, &m);
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        if (masks[i] == m) hits += (want[i] = only.intersect(rays[i])).hit();
     }
-  }
+    CHECK(hits > rays.size() / 5);
+    accel_test::FormCheck c;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      c.single += !agree(masked.intersect(rays[i], masks[i]), want[i]);
+      c.occluded += masked.occluded(rays[i], masks[i]) != want[i].hit();
+    }
+    check_packets<4>(masked, rays, masks, want, rng, c);
+    check_packets<8>(masked, rays, masks, want, rng, c);
+    check_packets<16>(masked, rays, masks, want, rng, c);
+    std::vector<Hit> stream(rays.size());
+    std::vector<std::uint8_t> blocked(rays.size());
+    masked.intersect(rays.data(), masks.data(), rays.size(), stream.data());
+    masked.occluded(rays.data(), masks.data(), rays.size(), blocked.data());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      c.stream += !agree(stream[i], want[i]);
+      c.stream_occluded += blocked[i] != (want[i].hit() ? 1 : 0);
+    }
+    report(c, "masked forms against the scene with the hidden geometries disabled");
+    // The forms without a mask (full packets among them: every layer without a copy):
+    // every geometry but the mask-0 one.
+    const Accel all = scene.make({test, isa}, &kMaskAll);
+    std::vector<Hit> want_all(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) want_all[i] = all.intersect(rays[i]);
+    report(accel_test::check_forms(masked, rays, want_all, 5), "forms without a mask against the scene of mask ~0");
+  });
 }
 
 TEST_CASE("masks: a scene without masks has one layer, masked scenes refit, save and load") {

@@ -69,35 +69,30 @@ TEST_CASE("refit: moved vertices give the answers of a fresh build, every ISA, t
   const Grid grid(24);
   const std::vector<float> start = grid.waved(0.3f), moved = grid.waved(0.4f);
   const std::vector<Ray> rays = rays_down(700, 3);
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
-    for (TriangleTest test : kTests) {
-      CAPTURE(std::string(volley::to_string(isa)));
-      CAPTURE(std::string(volley::to_string(test)));
-      Accel accel;
-      const std::uint32_t g = accel.add_triangles(start.data(), grid.vertices(), grid.indices.data(), grid.triangles());
-      accel.commit({test, isa});
-      CHECK(!accel.info().refitted);
-      accel.update_vertices(g, moved.data(), grid.vertices());
-      CHECK_THROWS_WITH_AS(accel.intersect(rays[0]), doctest::Contains("commit"), volley::Error);
-      accel.commit({test, isa});
-      CHECK(accel.info().refitted);
-      CHECK(accel.info().sah_growth > 0.9);
-      Accel fresh;
-      fresh.add_triangles(moved.data(), grid.vertices(), grid.indices.data(), grid.triangles());
-      fresh.commit({test, isa});
-      std::vector<Hit> want(rays.size());
-      std::size_t hits = 0;
-      for (std::size_t i = 0; i < rays.size(); ++i) hits += (want[i] = fresh.intersect(rays[i])).hit();
-      CHECK(hits > rays.size() / 2);
-      report(check_forms(accel, rays, want, 5), "refitted against a fresh build");
-      // Back to the start: refitted again, to the SAH cost of the build.
-      accel.update_vertices(g, start.data(), grid.vertices());
-      accel.commit({test, isa});
-      CHECK(accel.info().refitted);
-      CHECK(accel.info().sah_growth == doctest::Approx(1.0));
-    }
-  }
+  accel_test::for_each_isa_and_test([&](Isa isa, TriangleTest test) {
+    Accel accel;
+    const std::uint32_t g = accel.add_triangles(start.data(), grid.vertices(), grid.indices.data(), grid.triangles());
+    accel.commit({test, isa});
+    CHECK(!accel.info().refitted);
+    accel.update_vertices(g, moved.data(), grid.vertices());
+    CHECK_THROWS_WITH_AS(accel.intersect(rays[0]), doctest::Contains("commit"), volley::Error);
+    accel.commit({test, isa});
+    CHECK(accel.info().refitted);
+    CHECK(accel.info().sah_growth > 0.9);
+    Accel fresh;
+    fresh.add_triangles(moved.data(), grid.vertices(), grid.indices.data(), grid.triangles());
+    fresh.commit({test, isa});
+    std::vector<Hit> want(rays.size());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) hits += (want[i] = fresh.intersect(rays[i])).hit();
+    CHECK(hits > rays.size() / 2);
+    report(check_forms(accel, rays, want, 5), "refitted against a fresh build");
+    // Back to the start: refitted again, to the SAH cost of the build.
+    accel.update_vertices(g, start.data(), grid.vertices());
+    accel.commit({test, isa});
+    CHECK(accel.info().refitted);
+    CHECK(accel.info().sah_growth == doctest::Approx(1.0));
+  });
 }
 
 TEST_CASE("refit: a refit to the same vertices changes no answer, bit for bit") {

@@ -116,42 +116,37 @@ TEST_CASE("save/load: a loaded structure gives the saved one's answers bit for b
   const Scene scene;
   const std::vector<Ray> rays = accel_test::mixed_rays(60, 12.0f, 5);
   const std::string path = temp_path("roundtrip.vacc");
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
-    for (TriangleTest test : accel_test::kTests) {
-      CAPTURE(std::string(volley::to_string(isa)));
-      CAPTURE(std::string(volley::to_string(test)));
-      const Accel saved = scene.make({test, isa});
-      saved.save(path);
-      const Accel loaded = Accel::load(path);
-      const std::vector<Hit> want = answers(saved, rays);
-      std::size_t hits = 0;
-      for (const Hit& h : want) hits += h.hit();
-      CHECK(hits > rays.size() / 4);
-      CHECK(differing(answers(loaded, rays), want) == 0);
-      report(check_forms(loaded, rays, want, 7), "loaded");
-      const volley::AccelInfo a = saved.info(), b = loaded.info();
-      CHECK(b.loaded);
-      CHECK(!a.loaded);
-      CHECK(b.isa == a.isa);
-      CHECK(b.test == a.test);
-      CHECK(b.triangles == a.triangles);
-      CHECK(b.polygons == a.polygons);
-      CHECK(b.geometries == a.geometries);
-      CHECK(b.disabled == 1);
-      CHECK(b.nodes == a.nodes);
-      CHECK(b.leaves == a.leaves);
-      CHECK(b.depth == a.depth);
-      CHECK(b.bytes == a.bytes);
-      CHECK(b.sah_cost == a.sah_cost);
-      CHECK(b.binary_sah_cost == a.binary_sah_cost);
-      // Saving what was loaded writes the same file.
-      const std::string again = temp_path("roundtrip_again.vacc");
-      loaded.save(again);
-      CHECK(read_bytes(again) == read_bytes(path));
-      std::remove(again.c_str());
-    }
-  }
+  accel_test::for_each_isa_and_test([&](Isa isa, TriangleTest test) {
+    const Accel saved = scene.make({test, isa});
+    saved.save(path);
+    const Accel loaded = Accel::load(path);
+    const std::vector<Hit> want = answers(saved, rays);
+    std::size_t hits = 0;
+    for (const Hit& h : want) hits += h.hit();
+    CHECK(hits > rays.size() / 4);
+    CHECK(differing(answers(loaded, rays), want) == 0);
+    report(check_forms(loaded, rays, want, 7), "loaded");
+    const volley::AccelInfo a = saved.info(), b = loaded.info();
+    CHECK(b.loaded);
+    CHECK(!a.loaded);
+    CHECK(b.isa == a.isa);
+    CHECK(b.test == a.test);
+    CHECK(b.triangles == a.triangles);
+    CHECK(b.polygons == a.polygons);
+    CHECK(b.geometries == a.geometries);
+    CHECK(b.disabled == 1);
+    CHECK(b.nodes == a.nodes);
+    CHECK(b.leaves == a.leaves);
+    CHECK(b.depth == a.depth);
+    CHECK(b.bytes == a.bytes);
+    CHECK(b.sah_cost == a.sah_cost);
+    CHECK(b.binary_sah_cost == a.binary_sah_cost);
+    // Saving what was loaded writes the same file.
+    const std::string again = temp_path("roundtrip_again.vacc");
+    loaded.save(again);
+    CHECK(read_bytes(again) == read_bytes(path));
+    std::remove(again.c_str());
+  });
   std::remove(path.c_str());
 }
 

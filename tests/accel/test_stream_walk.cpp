@@ -97,7 +97,7 @@ TEST_CASE("stream walk: the kernels' stream forms equal brute force on every ISA
     CHECK(wrong == 0);
     CHECK(wrong_blocked == 0);
 
-CHECK(wrong_with_bounds(*wide, rays, want) == 0);
+    CHECK(wrong_with_bounds(*wide, rays, want) == 0);
 
     // Short streams and odd lengths (below a group of lanes, one ray, none).
     for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{15}, std::size_t{17}, std::size_t{300}}) {

@@ -289,8 +289,7 @@ TEST_CASE("wide: packets and streams see polygons as single rays do") {
     const float x = -2.5f + 0.11f * float(i), y = 0.05f * float(i % 7) - 0.1f;
     rays.push_back(make_ray({x, y, 0}, {0, 0, 1}, i % 3 == 0 ? 3.5f : 0.0f));
   }
-  for (Isa isa : {Isa::scalar, Isa::sse42, Isa::avx2, Isa::avx512}) {
-    if (!volley::simd::cpu_has(isa)) continue;
+  for (Isa isa : all_isas()) {
     CAPTURE(std::string(volley::to_string(isa)));
     for (TriangleTest test : kTests) {
       Accel accel;

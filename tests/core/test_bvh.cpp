@@ -498,8 +498,9 @@ TEST_CASE("bvh: closest and any hit equal brute force on random triangle soups")
 TEST_CASE("bvh: axis-aligned rays with origins on slab planes of flat boxes (stress item 4)") {
   // Rays in the slab planes of many leaf boxes, through shared edges and vertices.
   Soup soup;
-  const std::vector<Ray> rays =
-      volley::test::slab_plane_grid<Ray>(16, soup, [](glm::vec3 o, glm::vec3 d) { return Ray{o, 0, d, kInf}; });
+  const std::vector<Ray> rays = volley::test::slab_plane_grid<Ray>(16, soup, [](glm::vec3 o, glm::vec3 d) {
+    return Ray{o, 0, d, kInf};
+  });
   const std::vector<BBox> boxes = soup.boxes();
   for (BvhBuildOptions opt : {BvhBuildOptions{}, BvhBuildOptions{16, 1, 1, 1, 1}}) {
     const Bvh bvh = volley::core::build_bvh(boxes, opt);

@@ -25,6 +25,9 @@
 #include "simd/rays/prepared_ray.h"
 #include "simd/rays/ray_packet.h"
 
+/// The kernel arches every kernel test runs on (a test skips those this CPU lacks: skip_isa).
+#define VOLLEY_TEST_ARCHES volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm
+
 TYPE_TO_STRING(volley::simd::Sse42);
 TYPE_TO_STRING(volley::simd::Avx2);
 TYPE_TO_STRING(volley::simd::Avx512);

@@ -148,20 +148,17 @@ void all_forms(unsigned seed) {
 
 }  // namespace
 
-TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: moller", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: moller", Arch, VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::moller>(11);
 }
 
-TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: plane", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: plane", Arch, VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::plane>(22);
 }
 
-TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: watertight", Arch, volley::simd::Sse42,
-                   volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+TEST_CASE_TEMPLATE("kernels agree with the scalar oracle lane by lane: watertight", Arch, VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   all_forms<Arch, TriangleTest::watertight>(33);
 }

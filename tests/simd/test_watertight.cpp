@@ -82,7 +82,7 @@ Leaks count_leaks(const Soup& soup, const std::vector<Ray>& rays) {
 }  // namespace
 
 TEST_CASE_TEMPLATE("watertight kernel: no leaks at shared vertices and edges of closed meshes", Arch,
-                   volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+                   VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   for (float offset : {0.0f, 1e3f, 1e5f, 1e6f}) {
     const int n = 4;
@@ -100,8 +100,8 @@ TEST_CASE_TEMPLATE("watertight kernel: no leaks at shared vertices and edges of 
   }
 }
 
-TEST_CASE_TEMPLATE("watertight kernel: axis-aligned rays on an integer heightfield never miss, fallback counted",
-                   Arch, volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+TEST_CASE_TEMPLATE("watertight kernel: axis-aligned rays on an integer heightfield never miss, fallback counted", Arch,
+                   VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   // Heightfield over [0, 8]^2 with integer heights; quads split on alternating diagonals.
   const int n = 8;

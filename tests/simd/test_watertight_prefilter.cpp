@@ -183,7 +183,7 @@ void kernels_pin() {
 }
 
 TEST_CASE_TEMPLATE("watertight kernels: hits at either end of the interval decided as the quotient says", Arch,
-                   volley::simd::Sse42, volley::simd::Avx2, volley::simd::Avx512, volley::simd::Avx512Ymm) {
+                   VOLLEY_TEST_ARCHES) {
   if (skip_isa<Arch>()) return;
   kernels_pin<Arch>();
 }
