@@ -34,15 +34,20 @@ void expect(volley_status status, volley_status expected, const char* function) 
   }
 }
 
+/* Adds a 4-vertex mesh of `triangles` triangles, expected to succeed; returns its geometry id. */
+static uint32_t add_mesh(volley_scene* scene, const float* xyz, const uint32_t* indices, size_t triangles) {
+  uint32_t id = 99;
+  expect(volley_scene_add_triangles(scene, xyz, 4, indices, triangles, &id), VOLLEY_OK, "volley_scene_add_triangles");
+  return id;
+}
+
 volley_scene* make_scene(void) {
   volley_scene* scene = NULL;
   uint32_t first = 99, polygon = 99;
   expect(volley_scene_create(&scene), VOLLEY_OK, "volley_scene_create");
-  expect(volley_scene_add_triangles(scene, kFloorXyz, 4, kFloorIndices, 2, &first), VOLLEY_OK,
-         "volley_scene_add_triangles");
+  first = add_mesh(scene, kFloorXyz, kFloorIndices, 2);
   check(first == 0, "floor geometry id", (int)first);
-  expect(volley_scene_add_triangles(scene, kTableXyz, 4, kTableIndices, 2, &first), VOLLEY_OK,
-         "volley_scene_add_triangles");
+  first = add_mesh(scene, kTableXyz, kTableIndices, 2);
   check(first == 1, "table geometry id", (int)first);
   expect(volley_scene_add_polygon(scene, kPolygonXyz, 6, &polygon), VOLLEY_OK, "volley_scene_add_polygon");
   check(polygon == 2, "polygon geometry id", (int)polygon);
@@ -242,11 +247,9 @@ static void check_validation(void) {
   expect(volley_scene_add_polygon(scene, skew, 4, NULL), VOLLEY_ERROR_INVALID_GEOMETRY, "volley_scene_add_polygon");
   expect(volley_scene_add_polygon(scene, NULL, 4, NULL), VOLLEY_ERROR_INVALID_ARGUMENT, "volley_scene_add_polygon");
   /* After all that, the scene is empty: the next triangles are geometry 0. */
-  expect(volley_scene_add_triangles(scene, kFloorXyz, 4, kFloorIndices, 2, &first), VOLLEY_OK,
-         "volley_scene_add_triangles");
+  first = add_mesh(scene, kFloorXyz, kFloorIndices, 2);
   check(first == 0, "failed calls added nothing", (int)first);
-  expect(volley_scene_add_triangles(scene, kFloorXyz, 4, kFloorIndices, 0, &first), VOLLEY_OK,
-         "volley_scene_add_triangles");
+  first = add_mesh(scene, kFloorXyz, kFloorIndices, 0);
   check(first == 1, "an empty mesh is a geometry too, the next id", (int)first);
 
   expect(volley_scene_commit(scene, (volley_triangle_test)7, VOLLEY_ISA_AUTO), VOLLEY_ERROR_INVALID_ARGUMENT,

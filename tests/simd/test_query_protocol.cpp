@@ -24,27 +24,23 @@ struct NoSink {
   void operator()(int, std::uint32_t, float, float, float) const {}
 };
 
-/// A single-ray query that keeps every rule; the ones below each break one.
-struct GoodRay {
-  static constexpr bool kNearFirst = true;
-  static constexpr bool kSureRange = false;
-  float bound(const Ray& ray) const { return ray.tmax; }
-  void node() {}
-  LeafStep leaf(const PreparedRay&, const Block*, std::uint32_t, float&) { return LeafStep::go_on; }
-  bool answer() const { return false; }
-};
-struct RayWithoutAnswer : GoodRay {
-  void answer() = delete;
-};
-struct RayLeafReturnsBool : GoodRay {
-  bool leaf(const PreparedRay&, const Block*, std::uint32_t, float&) { return false; }
-};
+/// A single-ray query that keeps every rule but one: it does not say kSureRange.
 struct RayWithoutSureRange {
   static constexpr bool kNearFirst = true;
   float bound(const Ray& ray) const { return ray.tmax; }
   void node() {}
   LeafStep leaf(const PreparedRay&, const Block*, std::uint32_t, float&) { return LeafStep::go_on; }
   bool answer() const { return false; }
+};
+/// A single-ray query that keeps every rule; the ones below each break one.
+struct GoodRay : RayWithoutSureRange {
+  static constexpr bool kSureRange = false;
+};
+struct RayWithoutAnswer : GoodRay {
+  void answer() = delete;
+};
+struct RayLeafReturnsBool : GoodRay {
+  bool leaf(const PreparedRay&, const Block*, std::uint32_t, float&) { return false; }
 };
 /// Its bound changes the query, so the walk (which calls it on a const query) cannot.
 struct RayMutableBound : GoodRay {
