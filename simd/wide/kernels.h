@@ -246,6 +246,9 @@ struct WideKernels {
   /// The stream walk of rays[0 .. n) (n <= kStreamBatch) for a stream query (queries.h).
   template <class Query>
   static void trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query);
+  /// The stream walk's steps over its state (stream_walk.h).
+  template <class Query>
+  struct StreamWalk;
   /// Bits of the first L lanes.
   static constexpr std::uint32_t kChunkBits = (1u << L) - 1u;
   /// The start of every packet query: screens the packet, prepares it for the triangle
