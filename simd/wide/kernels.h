@@ -1,7 +1,7 @@
 // The wide-BVH traversal kernels' interface: WideKernels<Arch, Test, Robust, PK> (one ray,
-// packets of 16 rays, any-hit packets of 32 on AVX2; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h), with
-// leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its
-// walks share. The bodies are in the files beside this one, one concept each:
+// packets of 16 rays, any-hit packets of 32 on AVX2; closest hit and any hit) against WideNode<8> nodes (wide_bvh.h),
+// with leaves handed to the triangle block kernels (block_kernels.h), and the packet setup its walks share. The bodies
+// are in the files beside this one, one concept each:
 //   query_protocol.h  what a walk asks of a query (the concepts each walk checks)
 //   queries.h, packet_queries.h, stream_queries.h
 //                   what is asked: each query's leaf action and termination rule
@@ -14,8 +14,10 @@
 //   single_entries.h  the single-ray entries (erased, counts, all hits, instances)
 //   packet_entry.h  packets: the entries and the lane screen that picks a walk
 //   frustum_walk.h  coherent packets: one interval test per node
-//   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk
-//   stream_walk.h   streams: lists of rays split node by node
+//   packet_walk.h   other packets: per-lane tests, subtrees handed to the single walk,
+//                   whose steps are
+//     lane_walk.h     the lanes' node test, child order and hand-offs (LaneWalk)
+//   stream_walk.h   streams: lists of rays split node by node (its steps: StreamWalk)
 // simd/wide/wide_traverse.h includes them all and declares the per-ISA instantiations.
 //
 // Conservative box test, as the scalar oracle's core::intersect_box (core/bvh_traverse.h),
@@ -274,6 +276,9 @@ struct WideKernels {
   template <class Query, bool Uniform, bool NoZero, class Leaves>
   static std::uint32_t trace_packet(const WideView<Leaves>& bvh, PreparedPacket<K>& prep,
                                     const detail::PacketSetup<K>& setup, Query& query);
+  /// The per-lane walk's state and steps (lane_walk.h).
+  template <class Query, bool Uniform, bool NoZero, class Leaves>
+  struct LaneWalk;
 };
 
 }  // namespace volley::simd
