@@ -59,8 +59,6 @@ std::vector<Ray> rays_down(int count, std::uint32_t seed) {
   return rays;
 }
 
-const TriangleTest kTests[] = {TriangleTest::plane, TriangleTest::moller, TriangleTest::watertight};
-
 }  // namespace
 
 TEST_CASE("refit: moved vertices give the answers of a fresh build, every ISA, test and query form") {
