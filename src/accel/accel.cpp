@@ -199,14 +199,20 @@ std::uint32_t Accel::occluded(const RayPacket<K>& rays, const std::uint32_t* mas
 namespace {
 
 /// Runs trace(begin, end) over a stream of `count` rays on `threads` (Accel's batch rule),
-/// in pieces of whole runs of 16 (the stream policy's runs stay as on one thread) of at
-/// least 1024 rays.
+/// in pieces of whole runs of 16 (the stream policy's runs stay as on one thread), each
+/// thread's share handed on at most kPiece rays at a time: the rays the stream policy
+/// copies aside and their answers then stay in cache, on one thread as on many.
 template <class Trace>
 void stream_pieces(const char* caller, std::size_t count, int threads, Trace&& trace) {
   constexpr std::size_t kRun = 16;
+  constexpr std::size_t kPiece = 4096;
   accel::for_chunks(
       caller, (count + kRun - 1) / kRun, threads,
-      [&](std::size_t r0, std::size_t r1) { trace(r0 * kRun, std::min(count, r1 * kRun)); }, 64);
+      [&](std::size_t r0, std::size_t r1) {
+        const std::size_t end = std::min(count, r1 * kRun);
+        for (std::size_t b = r0 * kRun; b < end; b += kPiece) trace(b, std::min(end, b + kPiece));
+      },
+      64);
 }
 
 /// The arguments of the rays from `first` on.
@@ -221,29 +227,33 @@ QueryArguments offset(const QueryArguments& args, std::size_t first) {
 
 void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, int threads) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
+  const bool mixed = impl_->batch_runs_share_nodes(rays, count, false);
   stream_pieces("intersect", count, threads,
-                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, nullptr, e - b, hits + b); });
+                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, nullptr, e - b, hits + b, mixed); });
 }
 
 void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, int threads) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
+  const bool mixed = impl_->batch_runs_share_nodes(rays, count, true);
   stream_pieces("occluded", count, threads,
-                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, nullptr, e - b, blocked + b); });
+                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, nullptr, e - b, blocked + b, mixed); });
 }
 
 void Accel::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits, int threads) const {
   if (!impl_->committed) throw Error("intersect: call commit() after adding geometry");
   if (!masks && count != 0) throw Error("intersect: masks is null (pass one mask per ray, or use the call without masks)");
+  const bool mixed = impl_->batch_runs_share_nodes(rays, count, false);
   stream_pieces("intersect", count, threads,
-                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, masks + b, e - b, hits + b); });
+                [&](std::size_t b, std::size_t e) { impl_->intersect(rays + b, masks + b, e - b, hits + b, mixed); });
 }
 
 void Accel::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
                      int threads) const {
   if (!impl_->committed) throw Error("occluded: call commit() after adding geometry");
   if (!masks && count != 0) throw Error("occluded: masks is null (pass one mask per ray, or use the call without masks)");
+  const bool mixed = impl_->batch_runs_share_nodes(rays, count, true);
   stream_pieces("occluded", count, threads,
-                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, masks + b, e - b, blocked + b); });
+                [&](std::size_t b, std::size_t e) { impl_->occluded(rays + b, masks + b, e - b, blocked + b, mixed); });
 }
 
 void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, const QueryArguments& args) const {

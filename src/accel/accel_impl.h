@@ -166,6 +166,9 @@ struct Accel::Impl {
     bool mixed_any = false;
     /// Every-hit runs may go as packets (packets, and no instances).
     bool every_hit_packets = false;
+    /// Batch calls may send runs of every octant as packets when their rays share their
+    /// nodes (Accel::Impl::batch_runs_share_nodes): on AVX-512 and AVX2, where that was measured.
+    bool probe_batches = false;
   };
   /// The committed scene's entry points for the queries and forms that some scenes answer
   /// faster another way. Each starts as the layer walk's form, which answers any scene
@@ -305,12 +308,19 @@ struct Accel::Impl {
   void occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, std::uint8_t* blocked) const;
   /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays, the rest
   /// by the stream walk where the scene allows it and enough are left, else one by one.
-  /// masks: one per ray, or null.
-  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const;
-  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const;
+  /// masks: one per ray, or null. `mixed_packets`: runs of every octant as packets
+  /// (batch_runs_share_nodes).
+  void intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits,
+                 bool mixed_packets = false) const;
+  void occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
+                bool mixed_packets = false) const;
   /// A stream hands its incoherent runs to the stream walk (queries.wide) when it has at
   /// least this many such rays.
   static constexpr std::size_t kStreamWalkRays = 256;
+  /// Whether this batch call's runs go as packets whatever their octants (closest hit, or
+  /// `any_hit`): accel::runs_share_nodes (stream_plan.h) where the scene is one wide BVH
+  /// whose runs may go as packets and the call has at least accel::kProbeMinRays rays.
+  bool batch_runs_share_nodes(const Ray* rays, std::size_t count, bool any_hit) const;
   AccelInfo info() const;
   /// Every hit of the layers `mask` selects, instances included, appended to `out`
   /// attributed (geom, prim, inst) in no particular order (accel_crossings.cpp).

@@ -159,6 +159,7 @@ void Accel::Impl::choose_queries() {
   q.stream.mixed_closest = has_instances;
   q.stream.mixed_any = has_instances || isa == Isa::avx512 || isa == Isa::avx2;
   q.stream.every_hit_packets = q.stream.packets && !has_instances;
+  q.stream.probe_batches = q.stream.packets && (isa == Isa::avx512 || isa == Isa::avx2);
   queries = q;
 }
 

@@ -1,14 +1,17 @@
 // Accel's stream queries: runs of 16 coherent rays traced as one packet, the rest by the
-// stream walk where the scene and ISA allow it, else one by one (see volley/accel.h).
+// stream walk where the scene and ISA allow it, else one by one (see volley/accel.h); a
+// batch call whose rays share their nodes sends its incoherent closest-hit runs as packets
+// too (stream_plan.h).
+#include <immintrin.h>
+
 #include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
-#include <immintrin.h>
-
 #include "accel/accel_impl.h"
+#include "accel/stream_plan.h"
 
 namespace volley {
 namespace {
@@ -45,10 +48,12 @@ void store_lane_bytes(std::uint32_t mask, std::uint8_t* out) {
 /// ray by ray, occlusion runs straddling an axis plane (shadow rays) as packets on AVX-512
 /// and AVX2 (perf/reports/rays.md).
 /// `axes`: mixed_axes of the run, when known (-1: not yet).
+/// `mixed`: this call's runs go as packets whatever their octants
+/// (Accel::Impl::batch_runs_share_nodes).
 template <class Plan>
-bool as_packet(const Plan& plan, const Ray* rays, std::size_t n, bool ordered, int axes = -1) {
-  return n == 16 && plan.packets && ((ordered ? plan.mixed_closest : plan.mixed_any) ||
-                                     (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
+bool as_packet(const Plan& plan, const Ray* rays, std::size_t n, bool ordered, int axes = -1, bool mixed = false) {
+  return n == 16 && plan.packets &&
+         (mixed || (ordered ? plan.mixed_closest : plan.mixed_any) || (axes < 0 ? mixed_axes(rays, n) : axes) == 0);
 }
 
 /// The rays of a stream left to the stream walk, copied together (per thread, reused), or
@@ -74,13 +79,14 @@ Leftover& leftover() {
 /// left.index, the others answered as misses by skip(i); or, when that is every run and no
 /// masks are given, none copied and left.whole set (bounce rays: the copy was 3-5% of
 /// their time). Every other run as as_packet says: packet(first) traces the run from
-/// `first` as a packet, single(i) ray i.
+/// `first` as a packet, single(i) ray i. `mixed`: every run as as_packet says (none left
+/// to the stream walk).
 template <class Impl, class Packet, class Single, class Skip>
-void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered,
+void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::size_t count, bool ordered, bool mixed,
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
   const auto by_rule = [&](std::size_t first, int axes) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(impl.queries.stream, rays + first, n, ordered, axes))
+    if (as_packet(impl.queries.stream, rays + first, n, ordered, axes, mixed))
       packet(first);
     else
       for (std::size_t i = first; i < first + n; ++i) single(i);
@@ -91,8 +97,8 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   left.rays.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    const int axes = impl.queries.wide ? mixed_axes(rays + first, n) : -1;
-    if (axes >= 2)
+    const int axes = impl.queries.wide && !mixed ? mixed_axes(rays + first, n) : -1;
+    if (axes >= 2 && !mixed)
       left.runs.push_back(first);
     else
       by_rule(first, axes);
@@ -118,10 +124,23 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
 
 }  // namespace
 
-void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits) const {
+bool accel::runs_share_nodes(const WideAccel& wide, const Ray* rays, std::size_t count, bool any_hit) {
+  if (wide.stats().leaves <= 16) return true;
+  std::uint64_t leaves = 0;
+  for (std::size_t k = 0; k < kProbeRays; ++k) leaves += wide.walk_counts(rays[k * count / kProbeRays], any_hit).leaves;
+  return static_cast<double>(leaves) < kProbeRays * kSharedLeavesPerRay;
+}
+
+bool Accel::Impl::batch_runs_share_nodes(const Ray* rays, std::size_t count, bool any_hit) const {
+  return queries.wide && queries.stream.probe_batches && count >= accel::kProbeMinRays &&
+         accel::runs_share_nodes(*queries.wide, rays, count, any_hit);
+}
+
+void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits,
+                            bool mixed_packets) const {
   Leftover& left = leftover();
   runs(
-      *this, rays, masks, count, true, left,
+      *this, rays, masks, count, true, mixed_packets, left,
       [&](std::size_t first) {
         RayPacket<16> p;
         volley::load(p, rays + first, 16);
@@ -148,7 +167,8 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
   }
 }
 
-void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked) const {
+void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::size_t count, std::uint8_t* blocked,
+                           bool mixed_packets) const {
   Leftover& left = leftover();
   // Double packets (AVX2, one wide BVH, no masks): two neighbouring runs of 16 walked as one
   // packet of 32, the first run held back until its neighbour comes or not.
@@ -161,7 +181,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
     store_lane_bytes(occluded(p, masks ? masks + first : nullptr), blocked + first);
   };
   runs(
-      *this, rays, masks, count, false, left,
+      *this, rays, masks, count, false, mixed_packets, left,
       [&](std::size_t first) {
         if (!pair) return single_run(first);
         if (held == kNone) {

@@ -213,12 +213,17 @@ class VOLLEY_API Accel {
   /// occlusion on AVX-512 and AVX2, and every run of a scene with instances, as a packet
   /// (shadow rays straddling one axis plane gained there; with instances a packet shares
   /// the top level's walk: perf/reports/instances.md); on AVX2, in a scene of one BVH and with no
-  /// masks, two neighbouring occlusion runs as one packet of 32 (docs/kernels.md). The stream walk reorders nothing the caller
+  /// masks, two neighbouring occlusion runs as one packet of 32 (docs/kernels.md). A call of
+  /// 4096 rays or more on AVX-512 or AVX2 first counts the leaves the single-ray walk reaches
+  /// for 64 of its rays spread over it: under 0.3 a ray (rays that mostly leave the tree
+  /// near its root: bounce rays in rooms), or in a tree of 16 leaves or fewer, every run
+  /// goes as a packet, whatever its octants (1.3-1.6x the stream walk there; counts, not
+  /// time, decide: perf/reports/rays.md). The stream walk reorders nothing the caller
   /// sees. Same answers as intersect(ray) per ray.
   /// `threads`, as in every batch call: 0 (the default) on the caller's oneTBB arena (all
   /// its threads; the default arena otherwise: all cores), 1 on the calling thread alone,
-  /// n > 1 on exactly n threads, in pieces of whole runs (at least 1024 rays each), with the
-  /// same answers. Error for threads < 0.
+  /// n > 1 on exactly n threads, in pieces of whole runs (at least 1024 rays each, handed to
+  /// the policy 4096 at a time), with the same answers. Error for threads < 0.
   void intersect(const Ray* rays, std::size_t count, Hit* hits, int threads = 0) const;
   /// Occlusion of a stream: blocked[i] = 1 when rays[i] is occluded, else 0. Regrouped as
   /// intersect(rays, count, hits).

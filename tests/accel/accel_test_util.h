@@ -353,6 +353,26 @@ inline std::vector<Ray> mixed_rays(int runs, float extent, std::uint32_t seed) {
   return rays;
 }
 
+/// Bounce-like rays: from random points of the soup's box in random directions, each run
+/// of 16 spread across every axis plane; every fourth ray a segment (finite tmax), bad rays
+/// (NaN, Inf, an empty interval) and zero direction components among them.
+inline std::vector<Ray> bounce_rays(std::size_t count, float extent, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-extent, extent), unit(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (std::size_t i = 0; i < count; ++i) {
+    const glm::vec3 o(pos(rng), pos(rng), pos(rng));
+    glm::vec3 d(unit(rng), unit(rng), unit(rng));
+    if (i % 37 == 5) d.y = (i % 2) ? 0.0f : -0.0f;
+    Ray ray = make_ray(o, d, 0.0f, i % 4 == 1 ? 0.5f + 4.0f * (unit(rng) + 1.0f) : kInf);
+    if (i % 101 == 7) ray.dir[0] = kNaN;
+    if (i % 103 == 9) ray.org[2] = -kInf;
+    if (i % 107 == 11) ray.tmin = 3.0f, ray.tmax = 2.0f;
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
 /// The wide engine (watertight test) over `soup` with one triangle per leaf, so that every
 /// leaf box is a triangle's own.
 inline std::unique_ptr<volley::accel::WideAccel> one_triangle_per_leaf(const Soup& soup, Isa isa, bool robust) {

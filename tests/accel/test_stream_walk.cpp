@@ -22,26 +22,6 @@ using namespace accel_test;
 
 namespace {
 
-/// Bounce-like rays: from random points of the soup's box in random directions, each run
-/// of 16 spread across every axis plane; every fourth ray a segment (finite tmax), bad rays
-/// (NaN, Inf, an empty interval) and zero direction components among them.
-std::vector<Ray> bounce_rays(std::size_t count, float extent, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> pos(-extent, extent), unit(-1.0f, 1.0f);
-  std::vector<Ray> rays;
-  for (std::size_t i = 0; i < count; ++i) {
-    const glm::vec3 o(pos(rng), pos(rng), pos(rng));
-    glm::vec3 d(unit(rng), unit(rng), unit(rng));
-    if (i % 37 == 5) d.y = (i % 2) ? 0.0f : -0.0f;
-    Ray ray = make_ray(o, d, 0.0f, i % 4 == 1 ? 0.5f + 4.0f * (unit(rng) + 1.0f) : kInf);
-    if (i % 101 == 7) ray.dir[0] = kNaN;
-    if (i % 103 == 9) ray.org[2] = -kInf;
-    if (i % 107 == 11) ray.tmin = 3.0f, ray.tmax = 2.0f;
-    rays.push_back(ray);
-  }
-  return rays;
-}
-
 /// Triangle ids 0 .. n - 1 and the binned-SAH tree of `soup` (what Accel would build).
 struct Built {
   volley::core::Bvh bvh;
