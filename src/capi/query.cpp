@@ -97,36 +97,8 @@ void require_aligned(const void* p, const char* name) {
                                       "); use aligned_alloc(64, ...) or a variable of the packet type");
 }
 
-// The C API's rule: a zero direction is a miss. The C++ API does not state it, though its
-// kernels answer so (1 / 0 = inf, then NaN or no root: the consumer test pins it for every
-// test, ISA and query mode). Single rays and packets check it here, where it is free: the
-// packet check is a branch-free pass over SoA lanes (|dx| + |dy| + |dz| is 0 exactly when
-// all three are; NaN and Inf never give 0). Streams do not: a pass over AoS rays would cost
-// a noticeable share of a stream of coherent rays (perf/reports/traversal.md).
-
 /// True when d is the zero vector.
 bool zero_direction(const float* d) { return std::fabs(d[0]) + std::fabs(d[1]) + std::fabs(d[2]) == 0.0f; }
-
-/// True when an active lane of p has a zero direction.
-template <int K>
-bool any_zero_lane(const RayPacket<K>& p) {
-  bool any = false;
-  for (int i = 0; i < K; ++i)
-    any |= (std::fabs(p.dx[i]) + std::fabs(p.dy[i]) + std::fabs(p.dz[i]) == 0.0f) & bool((p.active >> i) & 1u);
-  return any;
-}
-
-/// Calls trace(packet) with the caller's packet, or, when an active lane has a zero
-/// direction, with a copy in which such lanes are inert and inactive.
-template <int K, class Trace>
-auto with_zero_lanes_dropped(const RayPacket<K>& rays, Trace&& trace) {
-  if (!any_zero_lane(rays)) return trace(rays);
-  RayPacket<K> copy = rays;
-  for (int i = 0; i < K; ++i)
-    if (((copy.active >> i) & 1u) && copy.dx[i] == 0.0f && copy.dy[i] == 0.0f && copy.dz[i] == 0.0f)
-      make_inert(copy, i);
-  return trace(static_cast<const RayPacket<K>&>(copy));
-}
 
 /// A packet's closest hits (AnyHit false, into the hit packet) or occlusion bits (into a
 /// uint32_t); `masks`: the form with a mask per lane (masks must not be NULL).
@@ -140,15 +112,13 @@ volley_status query_packet(const char* function, const volley_scene* scene, cons
     require_pointer(out, AnyHit ? "occluded" : "hits");
     require_aligned(rays, "rays");
     if constexpr (AnyHit) {
-      *out = with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
-        return masked ? scene->accel.occluded(p, masks) : scene->accel.occluded(p);
-      });
+      const RayPacket<K>& p = as_cpp<K>(rays);
+      *out = masked ? scene->accel.occluded(p, masks) : scene->accel.occluded(p);
     } else {
       require_aligned(out, "hits");
       HitPacket<K>& hits = as_cpp<K>(out);
-      with_zero_lanes_dropped(as_cpp<K>(rays), [&](const RayPacket<K>& p) {
-        masked ? scene->accel.intersect(p, hits, masks) : scene->accel.intersect(p, hits);
-      });
+      const RayPacket<K>& p = as_cpp<K>(rays);
+      masked ? scene->accel.intersect(p, hits, masks) : scene->accel.intersect(p, hits);
     }
   });
 }
@@ -196,7 +166,8 @@ volley_status stream_query(const char* function, const volley_scene* scene, cons
 }  // namespace
 
 /// One ray's closest hit (AnyHit false, into a volley_hit) or occlusion (into an int),
-/// through the mask when one is given; a zero direction is a miss.
+/// through the mask when one is given (a zero direction misses there, as every bad ray does:
+/// volley/accel.h).
 template <bool AnyHit, class Out>
 volley_status query_one(const char* function, const volley_scene* scene, const volley_ray* ray,
                         const std::uint32_t* mask, Out* out) {
@@ -206,11 +177,10 @@ volley_status query_one(const char* function, const volley_scene* scene, const v
     require_pointer(out, AnyHit ? "occluded" : "hit");
     volley::Ray r;
     std::memcpy(&r, ray, sizeof r);
-    const bool miss = zero_direction(r.dir);
     if constexpr (AnyHit) {
-      *out = !miss && (mask ? scene->accel.occluded(r, *mask) : scene->accel.occluded(r)) ? 1 : 0;
+      *out = (mask ? scene->accel.occluded(r, *mask) : scene->accel.occluded(r)) ? 1 : 0;
     } else {
-      const volley::Hit h = miss ? volley::Hit{} : mask ? scene->accel.intersect(r, *mask) : scene->accel.intersect(r);
+      const volley::Hit h = mask ? scene->accel.intersect(r, *mask) : scene->accel.intersect(r);
       std::memcpy(out, &h, sizeof h);
     }
   });
