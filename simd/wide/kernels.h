@@ -199,6 +199,11 @@ struct WideKernels {
   /// the closest hit of each ray into hits[i] (hits[i].t on entry bounds its search).
   static void occluded(const View& bvh, const Ray* rays, std::size_t count, std::uint8_t* blocked);
   static void intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits);
+  /// The two above with ray i passing over the triangle of id excluded[i] (kInvalidPrim: none).
+  static void occluded_excluding(const View& bvh, const Ray* rays, std::size_t count, const std::uint32_t* excluded,
+                                 std::uint8_t* blocked);
+  static void intersect_excluding(const View& bvh, const Ray* rays, std::size_t count, const std::uint32_t* excluded,
+                                  Hit* hits);
 
   /// Single-ray traversal of the subtree `start` for `query` (queries.h: ClosestHitRay,
   /// AnyHitRay): returns query.answer(). The packet walks' fallback, and the entry of every
@@ -248,6 +253,10 @@ struct WideKernels {
   /// The stream walk of rays[0 .. n) (n <= kStreamBatch) for a stream query (queries.h).
   template <class Query>
   static void trace_stream(const View& bvh, const Ray* rays, std::size_t n, Query& query);
+  /// trace_stream over rays[0 .. count), kStreamBatch rays at a time: at(query, first)
+  /// first points the query's per-ray arrays at ray `first`.
+  template <class Query, class At>
+  static void stream_batches(const View& bvh, const Ray* rays, std::size_t count, Query& query, At&& at);
   /// The stream walk's steps over its state (stream_walk.h).
   template <class Query>
   struct StreamWalk;

@@ -16,14 +16,21 @@ namespace detail {
 /// its upper end then -inf (finished). A stream query names the single-ray query that
 /// answers one ray (`Single`, at leaves and in subtrees left to the single walk), makes one
 /// for ray i, and takes its answer back (`done`), lowering the ray's upper end `far`.
-template <class Kernels>
+/// Excludes: ray i passes over the triangle of id excluded[i] (the excluding query).
+template <class Kernels, bool Excludes = false>
 struct AnyHitStream {
-  using Single = AnyHitRay<Kernels>;
+  using Single = AnyHitRay<Kernels, Excludes>;
   static constexpr bool kNearFirst = false;
   std::uint8_t* blocked;
+  const std::uint32_t* excluded = nullptr;
 
   float bound(std::size_t, const Ray& ray) const { return ray.tmax; }
-  Single single(std::uint32_t) const { return Single{}; }
+  Single single(std::uint32_t i) const {
+    if constexpr (Excludes)
+      return Single{excluded[i]};
+    else
+      return Single{};
+  }
   void done(std::uint32_t i, const Single& q, float& far) {
     if (!q.answer()) return;
     blocked[i] = 1;
@@ -32,17 +39,24 @@ struct AnyHitStream {
 };
 
 /// Closest hit of each ray of a stream (stream_walk.h): hits[i] as ClosestHitRay's (its t
-/// on entry bounds the search), the ray's upper end lowered to it.
-template <class Kernels>
+/// on entry bounds the search), the ray's upper end lowered to it. Excludes as
+/// AnyHitStream's; its leaves then go ray by ray (the lanes' leaf test excludes nothing).
+template <class Kernels, bool Excludes = false>
 struct ClosestHitStream {
-  using Single = ClosestHitRay<Kernels>;
+  using Single = ClosestHitRay<Kernels, Excludes>;
   using B = typename Kernels::Float;
   static constexpr bool kNearFirst = true;
-  static constexpr bool kLeafLanes = true;
+  static constexpr bool kLeafLanes = !Excludes;
   Hit* hits;
+  const std::uint32_t* excluded = nullptr;
 
   float bound(std::size_t i, const Ray& ray) const { return hits[i].t < ray.tmax ? hits[i].t : ray.tmax; }
-  Single single(std::uint32_t i) const { return Single{hits[i]}; }
+  Single single(std::uint32_t i) const {
+    if constexpr (Excludes)
+      return Single{hits[i], excluded[i]};
+    else
+      return Single{hits[i]};
+  }
   void done(std::uint32_t i, const Single& q, float& far) {
     if (q.answer()) far = hits[i].t;
   }

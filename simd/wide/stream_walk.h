@@ -301,23 +301,48 @@ void WideKernels<Arch, Test, Robust, PK>::trace_stream(const View& bvh, const Ra
 }
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
-void WideKernels<Arch, Test, Robust, PK>::occluded(const View& bvh, const Ray* rays, std::size_t count,
-                                               std::uint8_t* blocked) {
-  std::memset(blocked, 0, count);
-  detail::AnyHitStream<WideKernels> query{blocked};
+template <class Query, class At>
+void WideKernels<Arch, Test, Robust, PK>::stream_batches(const View& bvh, const Ray* rays, std::size_t count,
+                                                         Query& query, At&& at) {
   for (std::size_t first = 0; first < count; first += kStreamBatch) {
-    query.blocked = blocked + first;
+    at(query, first);
     trace_stream(bvh, rays + first, count - first < kStreamBatch ? count - first : kStreamBatch, query);
   }
 }
 
 template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::occluded(const View& bvh, const Ray* rays, std::size_t count,
+                                               std::uint8_t* blocked) {
+  std::memset(blocked, 0, count);
+  detail::AnyHitStream<WideKernels> query{blocked};
+  stream_batches(bvh, rays, count, query, [&](auto& q, std::size_t first) { q.blocked = blocked + first; });
+}
+
+template <class Arch, TriangleTest Test, bool Robust, int PK>
 void WideKernels<Arch, Test, Robust, PK>::intersect(const View& bvh, const Ray* rays, std::size_t count, Hit* hits) {
   detail::ClosestHitStream<WideKernels> query{hits};
-  for (std::size_t first = 0; first < count; first += kStreamBatch) {
-    query.hits = hits + first;
-    trace_stream(bvh, rays + first, count - first < kStreamBatch ? count - first : kStreamBatch, query);
-  }
+  stream_batches(bvh, rays, count, query, [&](auto& q, std::size_t first) { q.hits = hits + first; });
+}
+
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::occluded_excluding(const View& bvh, const Ray* rays, std::size_t count,
+                                                             const std::uint32_t* excluded, std::uint8_t* blocked) {
+  std::memset(blocked, 0, count);
+  detail::AnyHitStream<WideKernels, true> query{blocked, excluded};
+  stream_batches(bvh, rays, count, query, [&](auto& q, std::size_t first) {
+    q.blocked = blocked + first;
+    q.excluded = excluded + first;
+  });
+}
+
+template <class Arch, TriangleTest Test, bool Robust, int PK>
+void WideKernels<Arch, Test, Robust, PK>::intersect_excluding(const View& bvh, const Ray* rays, std::size_t count,
+                                                              const std::uint32_t* excluded, Hit* hits) {
+  detail::ClosestHitStream<WideKernels, true> query{hits, excluded};
+  stream_batches(bvh, rays, count, query, [&](auto& q, std::size_t first) {
+    q.hits = hits + first;
+    q.excluded = excluded + first;
+  });
 }
 
 }  // namespace volley::simd

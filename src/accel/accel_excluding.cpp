@@ -4,7 +4,9 @@
 // no offset of its origin (an epsilon that is too small for far scenes and too large for
 // thin features). The engines pass over the primitive's internal id; an instance's
 // prototype passes over it only for the rays carried through that instance.
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "accel/accel_impl.h"
 
@@ -57,14 +59,45 @@ bool Accel::occluded_excluding(const Ray& ray, const Hit& excluded, std::uint32_
   return impl_->occluded_excluding(ray, mask, excluded);
 }
 
+namespace {
+
+/// The internal ids of a batch's excluded primitives (per thread, reused).
+std::vector<std::uint32_t>& excluded_ids() {
+  static thread_local std::vector<std::uint32_t> ids;
+  return ids;
+}
+
+}  // namespace
+
+bool Accel::Impl::excluding_stream(const QueryArguments& args, std::size_t count) const {
+  if (!queries.wide || count < kStreamWalkRays) return false;
+  if (args.masks)
+    for (std::size_t i = 0; i < count; ++i)
+      if (!(args.masks[i] & queries.wide_mask)) return false;
+  std::vector<std::uint32_t>& ids = excluded_ids();
+  ids.resize(count);
+  for (std::size_t i = 0; i < count; ++i) ids[i] = excluded_id("excluding", args.excluded[i]);
+  return true;
+}
+
 void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
                                       Hit* hits) const {
+  if (excluding_stream(args, count)) {
+    std::fill(hits, hits + count, Hit{});
+    queries.wide->intersect(rays, count, excluded_ids().data(), hits);
+    for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
+    return;
+  }
   for (std::size_t i = 0; i < count; ++i)
     hits[i] = intersect_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]);
 }
 
 void Accel::Impl::occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
                                      std::uint8_t* blocked) const {
+  if (excluding_stream(args, count)) {
+    queries.wide->occluded(rays, count, excluded_ids().data(), blocked);
+    return;
+  }
   for (std::size_t i = 0; i < count; ++i)
     blocked[i] = occluded_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]) ? 1 : 0;
 }

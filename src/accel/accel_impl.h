@@ -303,9 +303,14 @@ struct Accel::Impl {
   std::uint32_t excluded_elsewhere(const char* caller, const Hit& excluded) const;
   /// excluded_id of excluded[0 .. count), the index named in the error.
   void check_excluded(const char* caller, const Hit* excluded, std::size_t count) const;
-  /// The batch forms (args.excluded not null; args.masks one per ray or null), ray by ray.
+  /// The batch forms (args.excluded not null; args.masks one per ray or null): by the
+  /// stream walk where excluding_stream says so, else ray by ray.
   void intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, Hit* hits) const;
   void occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, std::uint8_t* blocked) const;
+  /// Whether an excluding batch goes to the stream walk: the scene is one wide BVH, the
+  /// batch holds at least kStreamWalkRays rays and every mask (if any) meets the BVH's;
+  /// then the rays' excluded ids are in this thread's buffer (excluding_ids, accel_excluding.cpp).
+  bool excluding_stream(const QueryArguments& args, std::size_t count) const;
   /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays, the rest
   /// by the stream walk where the scene allows it and enough are left, else one by one.
   /// masks: one per ray, or null. `mixed_packets`: runs of every octant as packets

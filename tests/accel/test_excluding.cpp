@@ -117,11 +117,23 @@ TEST_CASE("excluding: each ray answers as the scene without its excluded triangl
         CAPTURE(std::string(volley::to_string(test)));
         CAPTURE(offset.x);
         const Accel accel = soup.accel(test, isa);
-        std::size_t single = 0, occluded = 0, batch = 0, batch_occluded = 0, self = 0, plain_self = 0;
+        std::size_t single = 0, occluded = 0, batch = 0, batch_occluded = 0, self = 0, plain_self = 0, masked = 0;
         std::vector<Hit> hits(rays.size());
         std::vector<std::uint8_t> blocked(rays.size(), 7);
         accel.intersect(rays.data(), rays.size(), hits.data(), QueryArguments{nullptr, excluded.data(), 3});
         accel.occluded(rays.data(), rays.size(), blocked.data(), QueryArguments{nullptr, excluded.data(), 1});
+        // With masks: all meeting the scene's (the stream walk on SIMD ISAs), and one ray's
+        // meeting nothing (that ray a miss, the batch then ray by ray).
+        std::vector<std::uint32_t> all(rays.size(), volley::kMaskAll), one_off = all;
+        one_off[5] = 0;
+        std::vector<Hit> hits_all(rays.size()), hits_one_off(rays.size());
+        std::vector<std::uint8_t> blocked_all(rays.size(), 7), blocked_one_off(rays.size(), 7);
+        accel.intersect(rays.data(), rays.size(), hits_all.data(), QueryArguments{all.data(), excluded.data(), 1});
+        accel.intersect(rays.data(), rays.size(), hits_one_off.data(),
+                        QueryArguments{one_off.data(), excluded.data(), 1});
+        accel.occluded(rays.data(), rays.size(), blocked_all.data(), QueryArguments{all.data(), excluded.data(), 1});
+        accel.occluded(rays.data(), rays.size(), blocked_one_off.data(),
+                       QueryArguments{one_off.data(), excluded.data(), 1});
         for (std::size_t i = 0; i < rays.size(); ++i) {
           const Hit want = brute_force_excluding(soup, test, rays[i], skipped[i], isa);
           const Hit got = accel.intersect_excluding(rays[i], excluded[i]);
@@ -129,6 +141,10 @@ TEST_CASE("excluding: each ray answers as the scene without its excluded triangl
           occluded += accel.occluded_excluding(rays[i], excluded[i]) != want.hit();
           batch += !agree(hits[i], want);
           batch_occluded += blocked[i] != (want.hit() ? 1 : 0);
+          const bool off = one_off[i] == 0;
+          masked += !agree(hits_all[i], want) || blocked_all[i] != (want.hit() ? 1 : 0);
+          masked += off ? hits_one_off[i].hit() || blocked_one_off[i] != 0
+                        : !agree(hits_one_off[i], want) || blocked_one_off[i] != (want.hit() ? 1 : 0);
           self += got.hit() && got.prim == skipped[i];
           plain_self += accel.intersect(rays[i]).prim == skipped[i];
         }
@@ -136,6 +152,7 @@ TEST_CASE("excluding: each ray answers as the scene without its excluded triangl
         CHECK(occluded == 0);
         CHECK(batch == 0);
         CHECK(batch_occluded == 0);
+        CHECK(masked == 0);
         CHECK(self == 0);
         // Without the exclusion, rays that start on a triangle meet it again (the failure the
         // query exists for): the test would prove nothing if they did not.

@@ -106,6 +106,13 @@ class WideAccelFor final : public WideAccel {
   void intersect(const Ray* rays, std::size_t count, Hit* hits) const override {
     Kernels::intersect(view_, rays, count, hits);
   }
+  void occluded(const Ray* rays, std::size_t count, const std::uint32_t* excluded,
+                std::uint8_t* blocked) const override {
+    Kernels::occluded_excluding(view_, rays, count, excluded, blocked);
+  }
+  void intersect(const Ray* rays, std::size_t count, const std::uint32_t* excluded, Hit* hits) const override {
+    Kernels::intersect_excluding(view_, rays, count, excluded, hits);
+  }
   void all_hits(const Ray& ray, std::vector<Hit>& out) const override { Kernels::all_hits(view_, ray, out); }
   WalkCounts walk_counts(const Ray& ray, bool any_hit) const override {
     return Kernels::walk_counts(view_, ray, any_hit);

@@ -106,6 +106,10 @@ class WideAccel {
   /// its search).
   virtual void occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked) const = 0;
   virtual void intersect(const Ray* rays, std::size_t count, Hit* hits) const = 0;
+  /// The two above with ray i passing over the triangle of id excluded[i] (kInvalidPrim: none).
+  virtual void occluded(const Ray* rays, std::size_t count, const std::uint32_t* excluded,
+                        std::uint8_t* blocked) const = 0;
+  virtual void intersect(const Ray* rays, std::size_t count, const std::uint32_t* excluded, Hit* hits) const = 0;
   /// Every triangle hit with tmin <= t < tmax by the crossing test (the watertight test's
   /// exactly-once rule), appended to `out` in visiting order (prim = the triangle's id).
   virtual void all_hits(const Ray& ray, std::vector<Hit>& out) const = 0;
