@@ -102,7 +102,7 @@ void require(const char* caller, const void* p, std::size_t count, const char* w
 }  // namespace
 
 HitLists Accel::intersect_all(const Ray* rays, std::size_t count, int threads) const {
-  if (!impl_->committed) throw Error("intersect_all: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("intersect_all: call commit() after adding geometry");
   require("intersect_all", rays, count, "rays");
   // Each chunk gathers its rays' hits in order; the lists are then joined in ray order.
   std::vector<std::uint32_t> counts(count);
@@ -132,7 +132,7 @@ HitLists Accel::intersect_all(const Ray* rays, std::size_t count, int threads) c
 }
 
 void Accel::count_intersections(const Ray* rays, std::size_t count, std::uint32_t* counts, int threads) const {
-  if (!impl_->committed) throw Error("count_intersections: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("count_intersections: call commit() after adding geometry");
   require("count_intersections", rays, count, "rays");
   require("count_intersections", counts, count, "counts");
   for_chunks("count_intersections", count, threads, [&](std::size_t b, std::size_t e) {
@@ -143,7 +143,7 @@ void Accel::count_intersections(const Ray* rays, std::size_t count, std::uint32_
 }
 
 void Accel::contains(const float* xyz, std::size_t count, std::uint8_t* inside, int threads) const {
-  if (!impl_->committed) throw Error("contains: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("contains: call commit() after adding geometry");
   require("contains", xyz, count, "xyz");
   require("contains", inside, count, "inside");
   // In Morton order: the rays of neighbouring points share a direction and nearly an
@@ -162,7 +162,7 @@ void Accel::contains(const float* xyz, std::size_t count, std::uint8_t* inside, 
 
 void Accel::closest_points(const float* xyz, std::size_t count, ClosestPoint* out, float max_distance,
                            int threads) const {
-  if (!impl_->committed) throw Error("closest_points: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("closest_points: call commit() after adding geometry");
   require("closest_points", xyz, count, "xyz");
   require("closest_points", out, count, "out");
   if (!(max_distance >= 0.0f)) throw Error("closest_points: max_distance must be >= 0 (+inf for no limit)");
@@ -170,7 +170,7 @@ void Accel::closest_points(const float* xyz, std::size_t count, ClosestPoint* ou
 }
 
 void Accel::distances(const float* xyz, std::size_t count, float* out, bool is_signed, int threads) const {
-  if (!impl_->committed) throw Error("distances: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("distances: call commit() after adding geometry");
   require("distances", xyz, count, "xyz");
   require("distances", out, count, "out");
   impl_->closest_batch(xyz, count, threads, INFINITY, [&](std::size_t i, const ClosestPoint& c) {

@@ -38,20 +38,20 @@ void drop_repeated_hits(std::vector<Hit>& hits, std::size_t first) {
 }
 
 void Accel::Impl::all_hits(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const {
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     if (!(l.mask & mask)) continue;
     for (const auto& engine : l.engines) {
       const std::size_t first = out.size();
       engine->all_hits(ray, out);
-      if (quality == BuildQuality::high) drop_repeated_hits(out, first);
+      if (built.quality == BuildQuality::high) drop_repeated_hits(out, first);
       for (std::size_t i = first; i < out.size(); ++i) attribute(out[i].prim, out[i].geom);
     }
   }
-  if (has_instances) all_hits_instances(ray, mask, out);
+  if (built.has_instances) all_hits_instances(ray, mask, out);
 }
 
 std::size_t Accel::intersect_all(const Ray& ray, Hit* hits, std::size_t capacity, std::uint32_t mask) const {
-  if (!impl_->committed) throw Error("intersect_all: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("intersect_all: call commit() after adding geometry");
   if (!hits && capacity > 0) throw Error("intersect_all: hits is null with capacity > 0");
   std::vector<Hit>& all = scratch();
   impl_->all_hits(ray, mask, all);
@@ -61,14 +61,14 @@ std::size_t Accel::intersect_all(const Ray& ray, Hit* hits, std::size_t capacity
 }
 
 std::uint32_t Accel::count_intersections(const Ray& ray, std::uint32_t mask) const {
-  if (!impl_->committed) throw Error("count_intersections: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("count_intersections: call commit() after adding geometry");
   std::vector<Hit>& all = scratch();
   impl_->all_hits(ray, mask, all);
   return static_cast<std::uint32_t>(all.size());
 }
 
 bool Accel::contains(const float point[3]) const {
-  if (!impl_->committed) throw Error("contains: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("contains: call commit() after adding geometry");
   if (!point) throw Error("contains: point is null");
   std::vector<Hit>& all = scratch();
   impl_->all_hits(contains_ray(point), kMaskAll, all);

@@ -14,8 +14,8 @@ namespace volley {
 
 std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) const {
   if (excluded.prim == kInvalidPrim) return kInvalidPrim;  // a miss excludes nothing
-  if (excluded.inst == kInvalidId && excluded.geom < geometries.size()) {  // the common case, once per ray
-    const Geometry& g = geometries[excluded.geom];
+  if (excluded.inst == kInvalidId && excluded.geom < added.geometries.size()) {  // the common case, once per ray
+    const Geometry& g = added.geometries[excluded.geom];
     if (g.kind != Kind::instance && excluded.prim < g.count) return g.first + excluded.prim;
   }
   return excluded_elsewhere(caller, excluded);
@@ -24,17 +24,17 @@ std::uint32_t Accel::Impl::excluded_id(const char* caller, const Hit& excluded) 
 std::uint32_t Accel::Impl::excluded_elsewhere(const char* caller, const Hit& excluded) const {
   const auto where = [caller] { return std::string(caller) + ": the excluded hit's "; };
   if (excluded.inst != kInvalidId) {
-    if (excluded.inst >= geometries.size() || geometries[excluded.inst].kind != Kind::instance)
+    if (excluded.inst >= added.geometries.size() || added.geometries[excluded.inst].kind != Kind::instance)
       throw Error(where() + "inst " + std::to_string(excluded.inst) + " is not an instance of this scene");
     Hit inner = excluded;
     inner.inst = kInvalidId;
-    instances[geometries[excluded.inst].index].prototype->excluded_id(caller, inner);
+    added.instances[added.geometries[excluded.inst].index].prototype->excluded_id(caller, inner);
     return kInvalidPrim;  // not one of this scene's own primitives
   }
-  if (excluded.geom >= geometries.size() || geometries[excluded.geom].kind == Kind::instance)
+  if (excluded.geom >= added.geometries.size() || added.geometries[excluded.geom].kind == Kind::instance)
     throw Error(where() + "geom " + std::to_string(excluded.geom) + " is not a triangle or polygon geometry of this " +
-                "scene (" + std::to_string(geometries.size()) + " geometry ids)");
-  const Geometry& g = geometries[excluded.geom];
+                "scene (" + std::to_string(added.geometries.size()) + " geometry ids)");
+  const Geometry& g = added.geometries[excluded.geom];
   if (excluded.prim >= g.count)
     throw Error(where() + "prim " + std::to_string(excluded.prim) + " is not in geometry " +
                 std::to_string(excluded.geom) + " (" + std::to_string(g.count) + " primitives)");
@@ -42,20 +42,20 @@ std::uint32_t Accel::Impl::excluded_elsewhere(const char* caller, const Hit& exc
 }
 
 Hit Accel::Impl::intersect_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
-  return queries.intersect_excluding(*this, ray, mask, excluded_id("intersect_excluding", excluded), excluded);
+  return built.queries.intersect_excluding(*this, ray, mask, excluded_id("intersect_excluding", excluded), excluded);
 }
 
 bool Accel::Impl::occluded_excluding(const Ray& ray, std::uint32_t mask, const Hit& excluded) const {
-  return queries.occluded_excluding(*this, ray, mask, excluded_id("occluded_excluding", excluded), excluded);
+  return built.queries.occluded_excluding(*this, ray, mask, excluded_id("occluded_excluding", excluded), excluded);
 }
 
 Hit Accel::intersect_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask) const {
-  if (!impl_->committed) throw Error("intersect_excluding: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("intersect_excluding: call commit() after adding geometry");
   return impl_->intersect_excluding(ray, mask, excluded);
 }
 
 bool Accel::occluded_excluding(const Ray& ray, const Hit& excluded, std::uint32_t mask) const {
-  if (!impl_->committed) throw Error("occluded_excluding: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("occluded_excluding: call commit() after adding geometry");
   return impl_->occluded_excluding(ray, mask, excluded);
 }
 
@@ -70,10 +70,10 @@ std::vector<std::uint32_t>& excluded_ids() {
 }  // namespace
 
 bool Accel::Impl::excluding_stream(const QueryArguments& args, std::size_t count) const {
-  if (!queries.wide || count < kStreamWalkRays) return false;
+  if (!built.queries.wide || count < kStreamWalkRays) return false;
   if (args.masks)
     for (std::size_t i = 0; i < count; ++i)
-      if (!(args.masks[i] & queries.wide_mask)) return false;
+      if (!(args.masks[i] & built.queries.wide_mask)) return false;
   std::vector<std::uint32_t>& ids = excluded_ids();
   ids.resize(count);
   for (std::size_t i = 0; i < count; ++i) ids[i] = excluded_id("excluding", args.excluded[i]);
@@ -84,7 +84,7 @@ void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& arg
                                       Hit* hits) const {
   if (excluding_stream(args, count)) {
     std::fill(hits, hits + count, Hit{});
-    queries.wide->intersect(rays, count, excluded_ids().data(), hits);
+    built.queries.wide->intersect(rays, count, excluded_ids().data(), hits);
     for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
     return;
   }
@@ -95,7 +95,7 @@ void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& arg
 void Accel::Impl::occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
                                      std::uint8_t* blocked) const {
   if (excluding_stream(args, count)) {
-    queries.wide->occluded(rays, count, excluded_ids().data(), blocked);
+    built.queries.wide->occluded(rays, count, excluded_ids().data(), blocked);
     return;
   }
   for (std::size_t i = 0; i < count; ++i)

@@ -105,54 +105,14 @@ struct Accel::Impl {
     double sah_now = 0.0;                 ///< the same now (after refits)
   };
 
-  // Input, in internal-id order of each kind.
-  std::vector<glm::vec3> triangles;  ///< 3 vertices per triangle
-  std::vector<std::uint32_t> triangle_ids;
-  std::vector<core::Polygon> polygons;
-  std::vector<std::uint32_t> polygon_ids;
-  std::vector<Geometry> geometries;  ///< by geometry id
-  std::vector<Instance> instances;
-  std::uint32_t next_id = 0;
-
-  // Committed state.
-  bool committed = false;
-  TriangleTest test = TriangleTest::watertight;
-  Isa isa = Isa::scalar;
-  bool robust = true;             ///< Options::robust: padded slab tests
-  bool reference_double = false;  ///< Options::reference_double (isa == scalar only)
-  BuildQuality quality = BuildQuality::medium;  ///< Options::quality (high: triangles may repeat in leaves)
-  double build_seconds = 0.0;
-  std::size_t degenerate = 0;
-  std::size_t disabled = 0;       ///< geometries left out at the commit
-  bool one_geometry = false;      ///< the committed scene has one geometry (hits need no search)
-  /// {first id, geometry} of the geometries that hold primitives, by first id: what
-  /// attribute_search searches (instances and empty geometries left out: a field of
-  /// instances over one mesh searches one entry, not thousands).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> id_starts;
-  // What decides between a refit and a build at the next commit (Options::refit).
-  bool topology_changed = true;   ///< a geometry added, enabled, disabled or masked since the last build
-  bool vertices_changed = false;  ///< update_vertices since the last commit
-  Options built_with;             ///< the options of the last build (isa resolved)
-  std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
-  bool refitted = false;          ///< the last commit refitted
-  /// Boxes whose union holds everything hittable: the wide roots' children where every
-  /// layer is a wide BVH of triangles, else the box of every vertex added. An instance of
-  /// this Accel is bounded by them transformed (tighter than one box when it is rotated).
-  std::vector<core::BBox> bound_parts;
-  bool has_instances = false;     ///< some layer holds instances (the queries then walk them after the rest)
-  std::vector<Layer> layers;      ///< by descending mask; none when nothing can be hit
   /// A loaded Accel's triangle input, still in the mapped file (Accel::load): unpack() copies
-  /// it into the vectors above before anything reads them (a query does not).
+  /// it into Added's vectors before anything reads them (a query does not).
   struct Packed {
     std::shared_ptr<const accel::file::Mapping> file;
     std::span<const float> vertices;  ///< the triangle geometries' vertices, geometry after geometry
     std::span<const std::uint32_t> indices;
     std::span<const unsigned char> excluded_flat;
   };
-  std::optional<Packed> packed;
-  std::size_t loaded_triangles = 0;  ///< the triangles while packed
-  bool loaded = false;               ///< the structure came from a file (AccelInfo::loaded)
-  double load_seconds = 0.0;
 
   /// What the stream policy (stream.cpp) may do with the committed scene.
   struct StreamPlan {
@@ -200,7 +160,60 @@ struct Accel::Impl {
   /// The layers one by one: every scene's forms. The kernels directly: a scene that is one wide BVH.
   struct LayerWalk;
   struct WideDirect;
-  Queries queries;
+
+  /// The scene as added, which lives as long as the Accel: each kind's input in internal-id
+  /// order, and what changed since the last commit.
+  struct Added {
+    std::vector<glm::vec3> triangles;  ///< 3 vertices per triangle
+    std::vector<std::uint32_t> triangle_ids;
+    std::vector<core::Polygon> polygons;
+    std::vector<std::uint32_t> polygon_ids;
+    std::vector<Geometry> geometries;  ///< by geometry id
+    std::vector<Instance> instances;
+    std::uint32_t next_id = 0;
+    // What decides between a refit and a build at the next commit (Options::refit).
+    bool topology_changed = true;   ///< a geometry added, enabled, disabled or masked since the last build
+    bool vertices_changed = false;  ///< update_vertices since the last commit
+  };
+  /// The committed scene, made anew by each commit (or load): its options, layers and
+  /// engines, the tables that turn an engine's answer back into the caller's names, and the
+  /// table of query entry points.
+  struct Built {
+    bool committed = false;
+    TriangleTest test = TriangleTest::watertight;
+    Isa isa = Isa::scalar;
+    bool robust = true;                           ///< Options::robust: padded slab tests
+    bool reference_double = false;                ///< Options::reference_double (isa == scalar only)
+    BuildQuality quality = BuildQuality::medium;  ///< Options::quality (high: triangles may repeat in leaves)
+    double build_seconds = 0.0;
+    std::size_t degenerate = 0;
+    std::size_t disabled = 0;   ///< geometries left out at the commit
+    bool one_geometry = false;  ///< the committed scene has one geometry (hits need no search)
+    /// {first id, geometry} of the geometries that hold primitives, by first id: what
+    /// attribute_search searches (instances and empty geometries left out: a field of
+    /// instances over one mesh searches one entry, not thousands).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> id_starts;
+    Options built_with;                        ///< the options of the last build (isa resolved)
+    std::vector<unsigned char> excluded_flat;  ///< per triangle: left out as degenerate at the last build
+    bool refitted = false;                     ///< the last commit refitted
+    /// Boxes whose union holds everything hittable: the wide roots' children where every
+    /// layer is a wide BVH of triangles, else the box of every vertex added. An instance of
+    /// this Accel is bounded by them transformed (tighter than one box when it is rotated).
+    std::vector<core::BBox> bound_parts;
+    bool has_instances = false;  ///< some layer holds instances (the queries then walk them after the rest)
+    std::vector<Layer> layers;   ///< by descending mask; none when nothing can be hit
+    Queries queries;
+  };
+  /// The loaded image (Accel::load): the mapped file, while it still holds the input.
+  struct Mapped {
+    std::optional<Packed> packed;
+    std::size_t loaded_triangles = 0;  ///< the triangles while packed
+    bool loaded = false;               ///< the structure came from a file (AccelInfo::loaded)
+    double load_seconds = 0.0;
+  };
+  Added added;
+  Built built;
+  Mapped mapped;
   /// Fills `queries` for the committed layers (after a build, refit or load).
   void choose_queries();
 
@@ -212,7 +225,7 @@ struct Accel::Impl {
   /// index within it. Leaves a miss as it is.
   void attribute(std::uint32_t& prim, std::uint32_t& geom) const {
     if (prim == kInvalidPrim) return;
-    if (one_geometry) {
+    if (built.one_geometry) {
       geom = 0;
       return;
     }
@@ -224,7 +237,7 @@ struct Accel::Impl {
   std::array<float, 3> local_normal(std::uint32_t geom, std::uint32_t prim) const;
 
   /// Triangles added (also while packed).
-  std::size_t triangle_count() const { return packed ? loaded_triangles : triangle_ids.size(); }
+  std::size_t triangle_count() const { return mapped.packed ? mapped.loaded_triangles : added.triangle_ids.size(); }
   /// Copies a loaded Accel's input out of the file (a no-op otherwise): called before the
   /// input is changed or built from.
   void unpack();
@@ -276,16 +289,16 @@ struct Accel::Impl {
 
   // Queries (accel_query.cpp, stream.cpp): rays see the layers whose mask shares a bit with
   // `mask` (kMaskAll for the queries without a mask); mask 0 sees nothing.
-  Hit intersect(const Ray& ray, std::uint32_t mask) const { return queries.intersect(*this, ray, mask); }
+  Hit intersect(const Ray& ray, std::uint32_t mask) const { return built.queries.intersect(*this, ray, mask); }
   /// The closest hit and the occlusion of a ray of every mask (Queries::intersect_unmasked).
   Hit intersect(const Ray& ray) const {
     Hit hit;
-    queries.intersect_unmasked(queries.unmasked_target, ray, hit);
+    built.queries.intersect_unmasked(built.queries.unmasked_target, ray, hit);
     if (hit.inst == kInvalidId) attribute(hit.prim, hit.geom);
     return hit;
   }
-  bool occluded(const Ray& ray) const { return queries.occluded_unmasked(queries.unmasked_target, ray); }
-  bool occluded(const Ray& ray, std::uint32_t mask) const { return queries.occluded(*this, ray, mask); }
+  bool occluded(const Ray& ray) const { return built.queries.occluded_unmasked(built.queries.unmasked_target, ray); }
+  bool occluded(const Ray& ray, std::uint32_t mask) const { return built.queries.occluded(*this, ray, mask); }
   /// Packets: masks[i] is lane i's mask; null = kMaskAll for every lane.
   template <int K>
   void intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const;

@@ -80,8 +80,8 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   const std::shared_ptr<Impl>& proto = prototype.impl_;
   if (!proto) throw Error("add_instance: the prototype was moved from");
   if (proto == impl_) throw Error("add_instance: an Accel cannot instance itself");
-  if (!proto->committed) throw Error("add_instance: commit the prototype first");
-  if (!proto->instances.empty())
+  if (!proto->built.committed) throw Error("add_instance: commit the prototype first");
+  if (!proto->added.instances.empty())
     throw Error("add_instance: the prototype holds instances itself (instances are one level deep)");
   for (int k = 0; k < 12; ++k)
     if (!std::isfinite(transform[k]))
@@ -94,15 +94,15 @@ std::uint32_t Accel::add_instance(const Accel& prototype, const float* transform
   instance.prototype = proto;
   const std::uint32_t id = impl_->new_geometry(0, Impl::Kind::instance);
   instance.geometry = id;
-  impl_->instances.push_back(std::move(instance));
+  impl_->added.instances.push_back(std::move(instance));
   return id;
 }
 
 void Accel::Impl::compute_bound_parts() {
   // Where every layer is a wide BVH of triangles alone: the used children of its root.
-  bound_parts.clear();
-  bool wide = !layers.empty();
-  for (const Layer& l : layers) {
+  built.bound_parts.clear();
+  bool wide = !built.layers.empty();
+  for (const Layer& l : built.layers) {
     const accel::WideAccel* w = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
     const accel::WideImage image = w ? w->image() : accel::WideImage{};
     if (!w || l.engines.size() != 1 || !l.instances.empty() || (image.root & simd::wide_ref::kLeafBit)) {
@@ -112,41 +112,41 @@ void Accel::Impl::compute_bound_parts() {
     const auto& root = *static_cast<const simd::WideNode<simd::kWideN>*>(image.nodes);
     for (int c = 0; c < simd::kWideN; ++c) {
       const core::BBox b = simd::slot_box(root, c);
-      if (b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z) bound_parts.push_back(b);
+      if (b.lo.x <= b.hi.x && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z) built.bound_parts.push_back(b);
     }
   }
   if (wide) return;
   // Otherwise one box of every vertex added (conservative).
   core::BBox all;
-  if (packed) {
-    const std::span<const float> v = packed->vertices;
+  if (mapped.packed) {
+    const std::span<const float> v = mapped.packed->vertices;
     for (std::size_t i = 0; i + 2 < v.size(); i += 3) all.extend(glm::vec3(v[i], v[i + 1], v[i + 2]));
   } else {
-    for (const glm::vec3& p : triangles) all.extend(p);
+    for (const glm::vec3& p : added.triangles) all.extend(p);
   }
-  for (const core::Polygon& poly : polygons)
+  for (const core::Polygon& poly : added.polygons)
     for (const auto& p : poly.vertices) all.extend(p);
-  bound_parts = {all};
+  built.bound_parts = {all};
 }
 
 void Accel::Impl::build_instances() {
-  has_instances = false;
-  for (Layer& layer : layers) {
+  built.has_instances = false;
+  for (Layer& layer : built.layers) {
     layer.instances.clear();
     std::vector<core::BBox> boxes;
-    for (const Geometry& g : geometries) {
+    for (const Geometry& g : added.geometries) {
       if (g.kind != Kind::instance || !g.enabled || g.mask != layer.mask) continue;
-      const Instance& in = instances[g.index];
+      const Instance& in = added.instances[g.index];
       InstanceSlot slot;
       for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r) slot.object_columns[c][r] = r < 3 ? in.to_object[4 * r + c] : 0.0f;
       slot.prototype = in.prototype.get();
       slot.geometry = in.geometry;
       layer.instances.push_back(slot);
-      boxes.push_back(world_box(in.prototype->bound_parts, in.to_world));
+      boxes.push_back(world_box(in.prototype->built.bound_parts, in.to_world));
     }
-    layer.instance_tree.build(boxes, isa, robust);
-    has_instances |= !layer.instances.empty();
+    layer.instance_tree.build(boxes, built.isa, built.robust);
+    built.has_instances |= !layer.instances.empty();
   }
 }
 
@@ -207,7 +207,7 @@ auto query_instance(const Slot& in, const Ray& ray, float bound, std::uint32_t m
 
 bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& hit, const Hit* excluded) const {
   bool found = false;
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       Hit h = query_instance<false>(l.instances[k], ray, bound, mask, excluded);
@@ -224,7 +224,7 @@ bool Accel::Impl::intersect_instances(const Ray& ray, std::uint32_t mask, Hit& h
 }
 
 bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask, const Hit* excluded) const {
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float& bound) {
       return query_instance<true>(l.instances[k], ray, bound, mask, excluded);
@@ -235,7 +235,7 @@ bool Accel::Impl::occluded_instances(const Ray& ray, std::uint32_t mask, const H
 }
 
 void Accel::Impl::all_hits_instances(const Ray& ray, std::uint32_t mask, std::vector<Hit>& out) const {
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     if (!(l.mask & mask) || l.instances.empty()) continue;
     auto leaf = [&](std::uint32_t k, float&) {
       const InstanceSlot& in = l.instances[k];
@@ -269,7 +269,7 @@ void to_object(const float (&columns)[4][4], const RayPacket<16>& world, const f
 
 void Accel::Impl::intersect_instances(RayPacket<16>& world, const std::uint32_t* masks, HitPacket<16>& hits) const {
   const std::uint32_t active = world.active;
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     const std::uint32_t lanes = lanes_of(active, masks, l.mask);
     if (lanes == 0 || l.instances.empty()) continue;
     world.active = lanes;
@@ -303,7 +303,7 @@ void Accel::Impl::intersect_instances(RayPacket<16>& world, const std::uint32_t*
 std::uint32_t Accel::Impl::occluded_instances(RayPacket<16>& world, const std::uint32_t* masks) const {
   const std::uint32_t active = world.active;
   std::uint32_t blocked = 0;
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     const std::uint32_t lanes = lanes_of(active & ~blocked, masks, l.mask);
     if (lanes == 0 || l.instances.empty()) continue;
     world.active = lanes;

@@ -21,7 +21,7 @@ bool is_bool(std::uint32_t x) { return x <= 1; }
 
 void Accel::Impl::read_geometries(accel::file::Reader& in, const accel::file::Meta& meta,
                                   std::span<const accel::file::GeometryRecord> records, std::uint64_t& vertex_total) {
-  std::vector<Geometry>& out = geometries;
+  std::vector<Geometry>& out = added.geometries;
   if (records.size() != meta.geometries) in.fail("the geometry table does not match the meta chunk");
   std::uint64_t id = 0, triangles = 0, polygons = 0, disabled = 0;
   vertex_total = 0;
@@ -54,29 +54,30 @@ void Accel::Impl::read_options(accel::file::Reader& in) {
   if (h.test > static_cast<std::uint32_t>(TriangleTest::watertight) || h.isa > static_cast<std::uint32_t>(Isa::avx512) ||
       h.isa == static_cast<std::uint32_t>(Isa::automatic) || !is_bool(h.robust) || !is_bool(h.reference_double))
     in.fail("the header's options are not valid");
-  test = static_cast<TriangleTest>(h.test);
-  isa = static_cast<Isa>(h.isa);
-  robust = h.robust != 0;
-  reference_double = h.reference_double != 0;
-  if (reference_double && (isa != Isa::scalar || !robust)) in.fail("reference_double with a SIMD ISA or plain slabs");
-  if (!simd::cpu_has(isa))
-    in.fail("built for " + std::string(to_string(isa)) +
+  built.test = static_cast<TriangleTest>(h.test);
+  built.isa = static_cast<Isa>(h.isa);
+  built.robust = h.robust != 0;
+  built.reference_double = h.reference_double != 0;
+  if (built.reference_double && (built.isa != Isa::scalar || !built.robust))
+    in.fail("reference_double with a SIMD ISA or plain slabs");
+  if (!simd::cpu_has(built.isa))
+    in.fail("built for " + std::string(to_string(built.isa)) +
             ", which this CPU lacks (build the structure here, or save it with an ISA this CPU has)");
 }
 
 void Accel::Impl::read_polygons(accel::file::Reader& in, std::span<const std::uint32_t> sizes,
                                 std::span<const float> vertices) {
   std::size_t at = 0;
-  for (const Geometry& g : geometries) {
+  for (const Geometry& g : added.geometries) {
     if (g.kind != Kind::polygon) continue;
-    const std::uint32_t n = sizes[polygons.size()];
+    const std::uint32_t n = sizes[added.polygons.size()];
     if (n > (vertices.size() - at) / 3) in.fail("the polygon outlines run past their chunk");
     std::vector<glm::vec3> outline(n);
     for (std::uint32_t i = 0; i < n; ++i, at += 3) outline[i] = {vertices[at], vertices[at + 1], vertices[at + 2]};
     try {
-      polygons.push_back(core::make_polygon(std::move(outline)));
+      added.polygons.push_back(core::make_polygon(std::move(outline)));
     } catch (const std::invalid_argument& e) {
-      in.fail("polygon geometry " + std::to_string(&g - geometries.data()) + ": " + e.what());
+      in.fail("polygon geometry " + std::to_string(&g - added.geometries.data()) + ": " + e.what());
     }
   }
   if (at != vertices.size()) in.fail("the polygon outlines do not fill their chunk");
@@ -90,7 +91,7 @@ void Accel::Impl::load_from(const std::string& path) {
 
   const file::Meta& meta = in.one<file::Meta>(file::Tag::meta);
   if (meta.quality > static_cast<std::uint32_t>(BuildQuality::high)) in.fail("the build quality is not valid");
-  quality = static_cast<BuildQuality>(meta.quality);
+  built.quality = static_cast<BuildQuality>(meta.quality);
   std::uint64_t vertex_total = 0;
   read_geometries(in, meta, in.next<file::GeometryRecord>(file::Tag::geometries), vertex_total);
   const auto vertices = in.next<float>(file::Tag::vertices, [&](std::span<const float> slab) {
@@ -98,12 +99,12 @@ void Accel::Impl::load_from(const std::string& path) {
       if (!std::isfinite(x)) in.fail("a triangle vertex is not finite");
   });
   // The indices, geometry after geometry, each below its geometry's vertex count.
-  auto geometry = geometries.begin();
+  auto geometry = added.geometries.begin();
   std::uint64_t left = 0;  // indices of *geometry still to come
   const auto indices = in.next<std::uint32_t>(file::Tag::indices, [&](std::span<const std::uint32_t> slab) {
     for (std::size_t k = 0; k < slab.size();) {
       while (left == 0) {
-        if (geometry == geometries.end()) in.fail("more triangle indices than triangles");
+        if (geometry == added.geometries.end()) in.fail("more triangle indices than triangles");
         if (geometry->kind == Kind::triangles && geometry->count != 0) {
           left = 3 * std::uint64_t{geometry->count};
         } else {
@@ -114,7 +115,7 @@ void Accel::Impl::load_from(const std::string& path) {
       std::uint32_t largest = 0;
       for (std::size_t i = k; i < k + n; ++i) largest = std::max(largest, slab[i]);
       if (n != 0 && largest >= geometry->vertex_count)
-        in.fail("geometry " + std::to_string(geometry - geometries.begin()) + " has a vertex index out of range");
+        in.fail("geometry " + std::to_string(geometry - added.geometries.begin()) + " has a vertex index out of range");
       k += n, left -= n;
       if (left == 0) ++geometry;
     }
@@ -125,9 +126,9 @@ void Accel::Impl::load_from(const std::string& path) {
   if (vertices.size() != 3 * vertex_total || indices.size() != 3 * meta.triangles ||
       polygon_sizes.size() != meta.polygons || excluded_flat_in.size() != meta.triangles)
     in.fail("the input chunks' sizes do not match the geometry table");
-  for (const Geometry& g : geometries)
-    if (g.kind == Kind::polygon) polygon_ids.push_back(g.first);
-  next_id = static_cast<std::uint32_t>(meta.next_id);
+  for (const Geometry& g : added.geometries)
+    if (g.kind == Kind::polygon) added.polygon_ids.push_back(g.first);
+  added.next_id = static_cast<std::uint32_t>(meta.next_id);
 
   read_polygons(in, polygon_sizes, polygon_vertices);
 
@@ -137,22 +138,22 @@ void Accel::Impl::load_from(const std::string& path) {
   for (const std::uint32_t mask : masks) read_layer(in, mask, mapping);
   in.finish();
 
-  degenerate = meta.degenerate;
-  disabled = meta.disabled;
-  packed = Packed{mapping, vertices, indices, excluded_flat_in};
-  loaded_triangles = meta.triangles;
-  if (isa == Isa::scalar) {
+  built.degenerate = meta.degenerate;
+  built.disabled = meta.disabled;
+  mapped.packed = Packed{mapping, vertices, indices, excluded_flat_in};
+  mapped.loaded_triangles = meta.triangles;
+  if (built.isa == Isa::scalar) {
     // The oracle's structures are for checking, not speed: rebuilt from the input.
     unpack();
     build();
   } else {
-    for (Layer& l : layers) build_polygons(l);
+    for (Layer& l : built.layers) build_polygons(l);
     finish_build();
   }
-  refitted = meta.refitted != 0;
-  build_seconds = meta.build_seconds;
-  loaded = true;
-  committed = true;
+  built.refitted = meta.refitted != 0;
+  built.build_seconds = meta.build_seconds;
+  mapped.loaded = true;
+  built.committed = true;
 }
 
 void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
@@ -160,22 +161,22 @@ void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
   namespace file = accel::file;
   const file::Header& h = in.header();
   const file::LayerRecord& r = in.one<file::LayerRecord>(file::Tag::layer);
-  const bool has_triangles = std::any_of(geometries.begin(), geometries.end(), [&](const Geometry& g) {
+  const bool has_triangles = std::any_of(added.geometries.begin(), added.geometries.end(), [&](const Geometry& g) {
     return g.enabled && g.kind != Kind::polygon && g.mask == mask;
   });
   if (r.mask != mask || r.has_triangles != (has_triangles ? 1u : 0u))
     in.fail("a layer record does not match the geometries' masks");
   // The wide BVH: its blocks' triangle ids checked while they are read, its tree after.
   std::unique_ptr<accel::WideAccel> wide;
-  if (isa != Isa::scalar && has_triangles) {
-    wide = accel::WideAccel::create(test, isa, robust);
+  if (built.isa != Isa::scalar && has_triangles) {
+    wide = accel::WideAccel::create(built.test, built.isa, built.robust);
     if (h.node_bytes != sizeof(simd::WideNode<simd::kWideN>) || h.block_bytes != wide->block_bytes())
       in.fail("the wide BVH's node or block size does not match this build of volley");
   }
   const auto nodes = in.next<unsigned char>(file::Tag::nodes);
   const std::size_t block_bytes = wide ? wide->block_bytes() : 1;
   std::size_t blocks_seen = 0;
-  const accel::ImageIds ids{next_id, &polygon_ids};
+  const accel::ImageIds ids{added.next_id, &added.polygon_ids};
   const auto blocks = in.next_items(file::Tag::blocks, block_bytes, [&](std::span<const unsigned char> slab) {
     if (!wide) in.fail("triangle blocks in a layer that has none");
     const std::size_t count = slab.size() / block_bytes;
@@ -188,9 +189,9 @@ void Accel::Impl::read_layer(accel::file::Reader& in, std::uint32_t mask,
   });
   if (!wide && (!nodes.empty() || !blocks.empty())) in.fail("wide nodes in a layer that has none");
   if (nodes.size() % sizeof(simd::WideNode<simd::kWideN>) != 0) in.fail("the nodes chunk holds part of a node");
-  if (isa == Isa::scalar) return;  // rebuilt
+  if (built.isa == Isa::scalar) return;  // rebuilt
 
-  Layer& layer = layers.emplace_back();
+  Layer& layer = built.layers.emplace_back();
   layer.mask = mask;
   layer.built_sah = r.built_sah;
   layer.sah_now = r.sah_now;

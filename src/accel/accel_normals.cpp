@@ -43,33 +43,34 @@ inline std::array<float, 3> triangle_normal(const float* p0, const float* p1, co
 }  // namespace
 
 std::array<float, 3> Accel::Impl::local_normal(std::uint32_t geom, std::uint32_t prim) const {
-  if (geom >= geometries.size()) return {kNaN, kNaN, kNaN};
-  const Geometry& g = geometries[geom];
+  if (geom >= added.geometries.size()) return {kNaN, kNaN, kNaN};
+  const Geometry& g = added.geometries[geom];
   if (g.kind == Kind::instance || prim >= g.count) return {kNaN, kNaN, kNaN};
   if (g.kind == Kind::polygon) {
-    const core::Polygon& p = polygons[g.index];
+    const core::Polygon& p = added.polygons[g.index];
     const double n[3] = {p.normal.x, p.normal.y, p.normal.z};
     return unit(n);
   }
   // The three vertices: from the copies (built, or unpacked), or from the mapped file.
   const float* v[3];
   for (int k = 0; k < 3; ++k) {
-    if (packed) {
-      const std::uint32_t index = packed->indices[3 * (g.index + prim) + static_cast<std::size_t>(k)];
-      v[k] = &packed->vertices[3 * (g.packed_vertices + index)];
+    if (mapped.packed) {
+      const std::uint32_t index = mapped.packed->indices[3 * (g.index + prim) + static_cast<std::size_t>(k)];
+      v[k] = &mapped.packed->vertices[3 * (g.packed_vertices + index)];
     } else {
-      v[k] = &triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
+      v[k] = &added.triangles[3 * (g.index + prim) + static_cast<std::size_t>(k)].x;
     }
   }
   return triangle_normal(v[0], v[1], v[2]);
 }
 
 std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
-  if (!impl_->committed) throw Error("geometric_normal: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("geometric_normal: call commit() after adding geometry");
   if (!hit.hit()) return {kNaN, kNaN, kNaN};
   if (hit.inst == kInvalidId) return impl_->local_normal(hit.geom, hit.prim);
-  if (hit.inst >= impl_->geometries.size() || impl_->geometries[hit.inst].kind != Impl::Kind::instance) return {kNaN, kNaN, kNaN};
-  const Impl::Instance& in = impl_->instances[impl_->geometries[hit.inst].index];
+  if (hit.inst >= impl_->added.geometries.size() || impl_->added.geometries[hit.inst].kind != Impl::Kind::instance)
+    return {kNaN, kNaN, kNaN};
+  const Impl::Instance& in = impl_->added.instances[impl_->added.geometries[hit.inst].index];
   const std::array<float, 3> n = in.prototype->local_normal(hit.geom, hit.prim);
   // Normals map by the inverse transpose: world n = A^-T n_object, A^-1 being to_object's 3x3.
   const float* m = in.to_object;
@@ -79,7 +80,7 @@ std::array<float, 3> Accel::geometric_normal(const Hit& hit) const {
 }
 
 void Accel::geometric_normals(const Hit* hits, std::size_t count, float* xyz, int threads) const {
-  if (!impl_->committed) throw Error("geometric_normals: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("geometric_normals: call commit() after adding geometry");
   if (count > 0 && (!hits || !xyz)) throw Error("geometric_normals: hits or xyz is null with count > 0");
   const Impl& im = *impl_;
   auto normals = [&](std::size_t begin, std::size_t end) {
@@ -88,11 +89,13 @@ void Accel::geometric_normals(const Hit* hits, std::size_t count, float* xyz, in
       std::array<float, 3> n{kNaN, kNaN, kNaN};
       if (!h.hit()) {
         // a miss (most rays of many batches): no call
-      } else if (const Impl::Geometry* g = h.inst == kInvalidId && !im.packed && h.geom < im.geometries.size()
-                                             ? &im.geometries[h.geom] : nullptr;
+      } else if (const Impl::Geometry* g =
+                     h.inst == kInvalidId && !im.mapped.packed && h.geom < im.added.geometries.size()
+                         ? &im.added.geometries[h.geom]
+                         : nullptr;
                  g && g->kind == Impl::Kind::triangles && h.prim < g->count) {
         // A triangle of this Accel as added (most hits): local_normal without its call.
-        const glm::vec3* p = &im.triangles[3 * (g->index + h.prim)];
+        const glm::vec3* p = &im.added.triangles[3 * (g->index + h.prim)];
         n = triangle_normal(&p[0].x, &p[1].x, &p[2].x);
       } else {
         n = geometric_normal(h);

@@ -11,10 +11,10 @@
 namespace volley {
 
 ClosestPoint Accel::Impl::closest_point(core::PointQuery& query) const {
-  if (has_instances)
+  if (built.has_instances)
     throw Error("closest_point: scenes with instances are not supported by the point queries (query the prototypes)");
   try {
-    for (const Layer& l : layers)
+    for (const Layer& l : built.layers)
       for (const auto& engine : l.engines) engine->closest_point(query);
   } catch (const std::invalid_argument& e) {  // the wide plane-test engine
     throw Error(std::string("closest_point: ") + e.what() + "; commit with the watertight (default) or Moller test");
@@ -30,7 +30,7 @@ ClosestPoint Accel::Impl::closest_point(core::PointQuery& query) const {
 }
 
 ClosestPoint Accel::closest_point(const float point[3], float max_distance) const {
-  if (!impl_->committed) throw Error("closest_point: call commit() after adding geometry");
+  if (!impl_->built.committed) throw Error("closest_point: call commit() after adding geometry");
   if (!point) throw Error("closest_point: point is null");
   if (!(max_distance >= 0.0f)) throw Error("closest_point: max_distance must be >= 0 (+inf for no limit)");
   core::PointQuery query;

@@ -22,7 +22,7 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const 
   // The lanes an engine writes (a nearer hit: t's bits change) get their geometry and
   // index; the others keep what the caller passed. Inactive lanes are not read.
   std::uint32_t before[K];
-  if (!masks && all_lanes_active(rays) && one_geometry) {
+  if (!masks && all_lanes_active(rays) && built.one_geometry) {
     // Every lane ours and one geometry (prim needs no change): branch-free over all lanes.
     std::memcpy(before, hits.t, sizeof(before));
     trace_packet(rays, hits, nullptr);
@@ -47,9 +47,9 @@ void Accel::Impl::intersect(const RayPacket<K>& rays, HitPacket<K>& hits, const 
     attribute(hits.prim[i], hits.geom[i]);
     hits.inst[i] = kInvalidId;
   }
-  if (!has_instances) return;
+  if (!built.has_instances) return;
   if constexpr (K == 16) {
-    if (isa != Isa::scalar) {  // the instances' top level walked by the packet
+    if (built.isa != Isa::scalar) {  // the instances' top level walked by the packet
       RayPacket<16> p;
       accel::widen(rays, active, p);
       intersect_instances(p, masks, hits);
@@ -68,7 +68,7 @@ template <int K>
 void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, const std::uint32_t* masks) const {
   const std::uint32_t active = rays.active & lane_bits(K);
   if constexpr (K == 16) {
-    if (!masks && all_lanes_active(rays)) return queries.intersect_full(*this, rays, hits);
+    if (!masks && all_lanes_active(rays)) return built.queries.intersect_full(*this, rays, hits);
   }
   HitPacket<16> h;
   reset(h);
@@ -77,7 +77,7 @@ void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, con
     set_hit(h, i, hit_of(hits, i));
   }
   RayPacket<16> p;
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     const std::uint32_t lanes = lanes_of(active, masks, l.mask);
     if (lanes == 0) continue;
     accel::widen(rays, lanes, p);
@@ -92,11 +92,11 @@ void Accel::Impl::trace_packet(const RayPacket<K>& rays, HitPacket<K>& hits, con
 template <int K>
 std::uint32_t Accel::Impl::occluded_by_layers(const RayPacket<K>& rays, const std::uint32_t* masks) const {
   if constexpr (K == 16)
-    if (!masks && all_lanes_active(rays)) return queries.occluded_full(*this, rays);
+    if (!masks && all_lanes_active(rays)) return built.queries.occluded_full(*this, rays);
   const std::uint32_t active = rays.active & lane_bits(K);
   std::uint32_t blocked = 0;
   RayPacket<16> p;
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     const std::uint32_t lanes = lanes_of(active, masks, l.mask) & ~blocked;
     if (lanes == 0) continue;
     accel::widen(rays, lanes, p);
@@ -110,9 +110,9 @@ template <int K>
 std::uint32_t Accel::Impl::occluded(const RayPacket<K>& rays, const std::uint32_t* masks) const {
   const std::uint32_t active = rays.active & lane_bits(K);
   std::uint32_t blocked = occluded_by_layers(rays, masks);
-  if (!has_instances || (active & ~blocked) == 0) return blocked;
+  if (!built.has_instances || (active & ~blocked) == 0) return blocked;
   if constexpr (K == 16) {
-    if (isa != Isa::scalar) {  // the instances' top level walked by the packet
+    if (built.isa != Isa::scalar) {  // the instances' top level walked by the packet
       RayPacket<16> p;
       accel::widen(rays, active & ~blocked, p);
       return blocked | occluded_instances(p, masks);

@@ -11,16 +11,16 @@ namespace volley {
 
 accel::file::Meta Accel::Impl::meta_record() const {
   accel::file::Meta meta{};
-  meta.geometries = geometries.size();
+  meta.geometries = added.geometries.size();
   meta.triangles = triangle_count();
-  meta.polygons = polygons.size();
-  meta.next_id = next_id;
-  meta.degenerate = degenerate;
-  meta.disabled = disabled;
-  meta.layers = layers.size();
-  meta.build_seconds = build_seconds;
-  meta.refitted = refitted;
-  meta.quality = static_cast<std::uint32_t>(quality);
+  meta.polygons = added.polygons.size();
+  meta.next_id = added.next_id;
+  meta.degenerate = built.degenerate;
+  meta.disabled = built.disabled;
+  meta.layers = built.layers.size();
+  meta.build_seconds = built.build_seconds;
+  meta.refitted = built.refitted;
+  meta.quality = static_cast<std::uint32_t>(built.quality);
   return meta;
 }
 
@@ -48,10 +48,10 @@ void Accel::Impl::save_to(const std::string& path) const {
   std::vector<file::GeometryRecord> records;
   std::vector<std::uint32_t> polygon_sizes;
   std::vector<float> polygon_vertices;
-  for (const Geometry& g : geometries) {
+  for (const Geometry& g : added.geometries) {
     records.push_back({g.first, g.count, g.index, g.vertex_count, g.kind == Kind::polygon, g.enabled, g.moved, g.mask});
     if (g.kind != Kind::polygon) continue;
-    const std::vector<glm::vec3>& v = polygons[g.index].vertices;
+    const std::vector<glm::vec3>& v = added.polygons[g.index].vertices;
     polygon_sizes.push_back(static_cast<std::uint32_t>(v.size()));
     for (const glm::vec3& p : v) polygon_vertices.insert(polygon_vertices.end(), {p.x, p.y, p.z});
   }
@@ -62,27 +62,29 @@ void Accel::Impl::save_to(const std::string& path) const {
   std::vector<std::uint32_t> indices;
   std::span<const float> vertices_out;
   std::span<const std::uint32_t> indices_out;
-  std::span<const unsigned char> excluded_flat_out(excluded_flat);
-  if (packed) {
-    vertices_out = packed->vertices, indices_out = packed->indices, excluded_flat_out = packed->excluded_flat;
+  std::span<const unsigned char> excluded_flat_out(built.excluded_flat);
+  if (mapped.packed) {
+    vertices_out = mapped.packed->vertices, indices_out = mapped.packed->indices,
+    excluded_flat_out = mapped.packed->excluded_flat;
   } else {
-    for (const Geometry& g : geometries) {
+    for (const Geometry& g : added.geometries) {
       if (g.kind == Kind::polygon) continue;
       const std::size_t base = vertices.size();
       vertices.resize(base + 3 * g.vertex_count, 0.0f);
       for (std::size_t k = 0; k < g.indices.size(); ++k)
-        std::memcpy(&vertices[base + 3 * std::size_t{g.indices[k]}], &triangles[3 * g.index + k], 3 * sizeof(float));
+        std::memcpy(&vertices[base + 3 * std::size_t{g.indices[k]}], &added.triangles[3 * g.index + k],
+                    3 * sizeof(float));
       indices.insert(indices.end(), g.indices.begin(), g.indices.end());
     }
     vertices_out = vertices, indices_out = indices;
   }
 
   file::Header header{};
-  header.test = static_cast<std::uint32_t>(test);
-  header.isa = static_cast<std::uint32_t>(isa);
-  header.robust = robust;
-  header.reference_double = reference_double;
-  header.node_bytes = isa != Isa::scalar ? sizeof(simd::WideNode<simd::kWideN>) : 0;
+  header.test = static_cast<std::uint32_t>(built.test);
+  header.isa = static_cast<std::uint32_t>(built.isa);
+  header.robust = built.robust;
+  header.reference_double = built.reference_double;
+  header.node_bytes = built.isa != Isa::scalar ? sizeof(simd::WideNode<simd::kWideN>) : 0;
   header.block_bytes = 0;
 
   file::Writer out(path);
@@ -93,7 +95,7 @@ void Accel::Impl::save_to(const std::string& path) const {
   out.chunk(file::Tag::polygon_sizes, std::span<const std::uint32_t>(polygon_sizes));
   out.chunk(file::Tag::polygon_vertices, std::span<const float>(polygon_vertices));
   out.chunk(file::Tag::excluded_flat, excluded_flat_out);
-  for (const Layer& l : layers) {
+  for (const Layer& l : built.layers) {
     const accel::WideAccel* wide = l.triangle_engine ? l.triangle_engine->wide() : nullptr;
     const accel::WideImage image = wide ? wide->image() : accel::WideImage{};
     if (wide) header.block_bytes = static_cast<std::uint32_t>(image.block_bytes);
@@ -106,27 +108,27 @@ void Accel::Impl::save_to(const std::string& path) const {
 }
 
 void Accel::Impl::unpack() {
-  if (!packed) return;
-  const Packed p = *packed;
-  const std::size_t n = loaded_triangles;
-  triangles.resize(3 * n);
-  triangle_ids.resize(n);
+  if (!mapped.packed) return;
+  const Packed p = *mapped.packed;
+  const std::size_t n = mapped.loaded_triangles;
+  added.triangles.resize(3 * n);
+  added.triangle_ids.resize(n);
   const float* v = p.vertices.data();
   const std::uint32_t* idx = p.indices.data();
-  for (Geometry& g : geometries) {
+  for (Geometry& g : added.geometries) {
     if (g.kind == Kind::polygon) continue;
     g.indices.assign(idx, idx + 3 * std::size_t{g.count});
     for (std::size_t k = 0; k < g.indices.size(); ++k) {
       const float* x = v + 3 * std::size_t{g.indices[k]};
-      triangles[3 * g.index + k] = {x[0], x[1], x[2]};
+      added.triangles[3 * g.index + k] = {x[0], x[1], x[2]};
     }
-    for (std::uint32_t t = 0; t < g.count; ++t) triangle_ids[g.index + t] = g.first + t;
+    for (std::uint32_t t = 0; t < g.count; ++t) added.triangle_ids[g.index + t] = g.first + t;
     idx += 3 * std::size_t{g.count};
     v += 3 * g.vertex_count;
   }
-  excluded_flat.assign(p.excluded_flat.begin(), p.excluded_flat.end());
-  packed.reset();
-  for (Layer& l : layers)
+  built.excluded_flat.assign(p.excluded_flat.begin(), p.excluded_flat.end());
+  mapped.packed.reset();
+  for (Layer& l : built.layers)
     if (l.triangle_engine) exclude_others(l);
 }
 

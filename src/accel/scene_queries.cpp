@@ -12,7 +12,7 @@ namespace volley {
 struct Accel::Impl::LayerWalk {
   /// The engines' closest hit (prim an internal id) over the layers `mask` selects.
   static void engines_hit(const Impl& s, const Ray& ray, std::uint32_t mask, Hit& hit) {
-    for (const Layer& l : s.layers) {
+    for (const Layer& l : s.built.layers) {
       if (!(l.mask & mask)) continue;
       for (const auto& engine : l.engines) engine->intersect(ray, hit);
     }
@@ -22,7 +22,7 @@ struct Accel::Impl::LayerWalk {
     Hit hit;
     engines_hit(s, ray, mask, hit);
     s.attribute(hit.prim, hit.geom);
-    if (s.has_instances) s.intersect_instances(ray, mask, hit);
+    if (s.built.has_instances) s.intersect_instances(ray, mask, hit);
     return hit;
   }
 
@@ -31,7 +31,7 @@ struct Accel::Impl::LayerWalk {
     const Impl& s = *static_cast<const Impl*>(target);
     engines_hit(s, ray, kMaskAll, hit);
     Hit nearer = hit;
-    if (s.has_instances && s.intersect_instances(ray, kMaskAll, nearer)) hit = nearer;
+    if (s.built.has_instances && s.intersect_instances(ray, kMaskAll, nearer)) hit = nearer;
   }
 
   static bool occluded_unmasked(const void* target, const Ray& ray) {
@@ -39,46 +39,46 @@ struct Accel::Impl::LayerWalk {
   }
 
   static bool occluded(const Impl& s, const Ray& ray, std::uint32_t mask) {
-    for (const Layer& l : s.layers) {
+    for (const Layer& l : s.built.layers) {
       if (!(l.mask & mask)) continue;
       for (const auto& engine : l.engines)
         if (engine->occluded(ray)) return true;
     }
-    return s.has_instances && s.occluded_instances(ray, mask);
+    return s.built.has_instances && s.occluded_instances(ray, mask);
   }
 
   static Hit intersect_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id,
                                  const Hit& excluded) {
     Hit hit;
-    for (const Layer& l : s.layers) {
+    for (const Layer& l : s.built.layers) {
       if (!(l.mask & mask)) continue;
       for (const auto& engine : l.engines) engine->intersect_excluding(ray, id, hit);
     }
     s.attribute(hit.prim, hit.geom);
-    if (s.has_instances) s.intersect_instances(ray, mask, hit, &excluded);
+    if (s.built.has_instances) s.intersect_instances(ray, mask, hit, &excluded);
     return hit;
   }
 
   static bool occluded_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id,
                                  const Hit& excluded) {
-    for (const Layer& l : s.layers) {
+    for (const Layer& l : s.built.layers) {
       if (!(l.mask & mask)) continue;
       for (const auto& engine : l.engines)
         if (engine->occluded_excluding(ray, id)) return true;
     }
-    return s.has_instances && s.occluded_instances(ray, mask, &excluded);
+    return s.built.has_instances && s.occluded_instances(ray, mask, &excluded);
   }
 
   /// A full packet without masks sees every layer (no layer's mask is 0): the caller's
   /// packet goes to each engine as it is. Instances are the caller's (Impl::intersect).
   static void intersect_full(const Impl& s, const RayPacket<16>& rays, HitPacket<16>& hits) {
-    for (const Layer& l : s.layers)
+    for (const Layer& l : s.built.layers)
       for (const auto& engine : l.engines) engine->intersect(rays, hits);
   }
 
   static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) {
     std::uint32_t blocked = 0;
-    for (const Layer& l : s.layers)
+    for (const Layer& l : s.built.layers)
       for (const auto& engine : l.engines)
         if ((rays.active & ~blocked) != 0) blocked |= engine->occluded(rays, rays.active & ~blocked);
     return blocked & rays.active;
@@ -90,31 +90,33 @@ struct Accel::Impl::LayerWalk {
 struct Accel::Impl::WideDirect {
   static Hit intersect(const Impl& s, const Ray& ray, std::uint32_t mask) {
     Hit hit;
-    if (s.queries.wide_mask & mask) s.queries.wide->intersect(ray, hit);
+    if (s.built.queries.wide_mask & mask) s.built.queries.wide->intersect(ray, hit);
     s.attribute(hit.prim, hit.geom);
     return hit;
   }
 
   static bool occluded(const Impl& s, const Ray& ray, std::uint32_t mask) {
-    return (s.queries.wide_mask & mask) && s.queries.wide->occluded(ray);
+    return (s.built.queries.wide_mask & mask) && s.built.queries.wide->occluded(ray);
   }
 
   static Hit intersect_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id, const Hit&) {
     Hit hit;
-    if (s.queries.wide_mask & mask) s.queries.wide->intersect(ray, id, hit);
+    if (s.built.queries.wide_mask & mask) s.built.queries.wide->intersect(ray, id, hit);
     s.attribute(hit.prim, hit.geom);
     return hit;
   }
 
   static bool occluded_excluding(const Impl& s, const Ray& ray, std::uint32_t mask, std::uint32_t id, const Hit&) {
-    return (s.queries.wide_mask & mask) && s.queries.wide->occluded(ray, id);
+    return (s.built.queries.wide_mask & mask) && s.built.queries.wide->occluded(ray, id);
   }
 
   static void intersect_full(const Impl& s, const RayPacket<16>& rays, HitPacket<16>& hits) {
-    s.queries.wide->intersect(rays, hits);
+    s.built.queries.wide->intersect(rays, hits);
   }
 
-  static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) { return s.queries.wide->occluded(rays); }
+  static std::uint32_t occluded_full(const Impl& s, const RayPacket<16>& rays) {
+    return s.built.queries.wide->occluded(rays);
+  }
 };
 
 namespace {
@@ -140,27 +142,27 @@ void Accel::Impl::choose_queries() {
   q.intersect_unmasked = &LayerWalk::intersect_unmasked;
   q.occluded_unmasked = &LayerWalk::occluded_unmasked;
   q.unmasked_target = this;
-  const bool one_engine = layers.size() == 1 && layers[0].engines.size() == 1 && !has_instances;
-  q.wide = one_engine ? layers[0].engines[0]->wide() : nullptr;
+  const bool one_engine = built.layers.size() == 1 && built.layers[0].engines.size() == 1 && !built.has_instances;
+  q.wide = one_engine ? built.layers[0].engines[0]->wide() : nullptr;
   if (q.wide) {
-    q.wide_mask = layers[0].mask;
+    q.wide_mask = built.layers[0].mask;
     set_forms<WideDirect>(q);
     const accel::WideAccel::SingleRay& kernels = q.wide->single_ray();
     q.intersect_unmasked = kernels.intersect;
     q.occluded_unmasked = kernels.occluded;
     q.unmasked_target = kernels.bvh;
   }
-  q.stream.packets = !layers.empty() && (!has_instances || isa != Isa::scalar) &&
-                     std::all_of(layers.begin(), layers.end(), [](const Layer& l) {
+  q.stream.packets = !built.layers.empty() && (!built.has_instances || built.isa != Isa::scalar) &&
+                     std::all_of(built.layers.begin(), built.layers.end(), [](const Layer& l) {
                        return l.engines.empty() ? !l.instances.empty()
                                                 : std::any_of(l.engines.begin(), l.engines.end(),
                                                               [](const auto& e) { return e->traces_packets(); });
                      });
-  q.stream.mixed_closest = has_instances;
-  q.stream.mixed_any = has_instances || isa == Isa::avx512 || isa == Isa::avx2;
-  q.stream.every_hit_packets = q.stream.packets && !has_instances;
-  q.stream.probe_batches = q.stream.packets && (isa == Isa::avx512 || isa == Isa::avx2);
-  queries = q;
+  q.stream.mixed_closest = built.has_instances;
+  q.stream.mixed_any = built.has_instances || built.isa == Isa::avx512 || built.isa == Isa::avx2;
+  q.stream.every_hit_packets = q.stream.packets && !built.has_instances;
+  q.stream.probe_batches = q.stream.packets && (built.isa == Isa::avx512 || built.isa == Isa::avx2);
+  built.queries = q;
 }
 
 }  // namespace volley

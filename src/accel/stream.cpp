@@ -86,7 +86,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
           Leftover& left, Packet&& packet, Single&& single, Skip&& skip) {
   const auto by_rule = [&](std::size_t first, int axes) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    if (as_packet(impl.queries.stream, rays + first, n, ordered, axes, mixed))
+    if (as_packet(impl.built.queries.stream, rays + first, n, ordered, axes, mixed))
       packet(first);
     else
       for (std::size_t i = first; i < first + n; ++i) single(i);
@@ -97,7 +97,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   left.rays.clear();
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
-    const int axes = impl.queries.wide && !mixed ? mixed_axes(rays + first, n) : -1;
+    const int axes = impl.built.queries.wide && !mixed ? mixed_axes(rays + first, n) : -1;
     if (axes >= 2 && !mixed)
       left.runs.push_back(first);
     else
@@ -113,7 +113,7 @@ void runs(const Impl& impl, const Ray* rays, const std::uint32_t* masks, std::si
   }
   for (std::size_t first : left.runs)
     for (std::size_t i = first; i < std::min(count, first + 16); ++i) {
-      if (masks && !(masks[i] & impl.queries.wide_mask)) {
+      if (masks && !(masks[i] & impl.built.queries.wide_mask)) {
         skip(i);
         continue;
       }
@@ -132,8 +132,8 @@ bool accel::runs_share_nodes(const WideAccel& wide, const Ray* rays, std::size_t
 }
 
 bool Accel::Impl::batch_runs_share_nodes(const Ray* rays, std::size_t count, bool any_hit) const {
-  return queries.wide && queries.stream.probe_batches && count >= accel::kProbeMinRays &&
-         accel::runs_share_nodes(*queries.wide, rays, count, any_hit);
+  return built.queries.wide && built.queries.stream.probe_batches && count >= accel::kProbeMinRays &&
+         accel::runs_share_nodes(*built.queries.wide, rays, count, any_hit);
 }
 
 void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::size_t count, Hit* hits,
@@ -153,13 +153,13 @@ void Accel::Impl::intersect(const Ray* rays, const std::uint32_t* masks, std::si
       [&](std::size_t i) { hits[i] = Hit{}; });
   if (left.whole) {
     std::fill(hits, hits + count, Hit{});
-    queries.wide->intersect(rays, count, hits);
+    built.queries.wide->intersect(rays, count, hits);
     for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
     return;
   }
   if (left.rays.empty()) return;
   left.hits.assign(left.rays.size(), Hit{});
-  queries.wide->intersect(left.rays.data(), left.rays.size(), left.hits.data());
+  built.queries.wide->intersect(left.rays.data(), left.rays.size(), left.hits.data());
   for (std::size_t k = 0; k < left.index.size(); ++k) {
     Hit& h = hits[left.index[k]];
     h = left.hits[k];
@@ -172,7 +172,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
   Leftover& left = leftover();
   // Double packets (AVX2, one wide BVH, no masks): two neighbouring runs of 16 walked as one
   // packet of 32, the first run held back until its neighbour comes or not.
-  const bool pair = queries.wide && !masks && queries.wide->double_packets();
+  const bool pair = built.queries.wide && !masks && built.queries.wide->double_packets();
   constexpr std::size_t kNone = ~std::size_t{0};
   std::size_t held = kNone;
   const auto single_run = [&](std::size_t first) {
@@ -195,7 +195,7 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
         }
         RayPacket<32> p;
         volley::load(p, rays + held, 32);
-        const std::uint32_t hit = queries.wide->occluded(p);
+        const std::uint32_t hit = built.queries.wide->occluded(p);
         store_lane_bytes(hit & 0xffffu, blocked + held);
         store_lane_bytes(hit >> 16, blocked + first);
         held = kNone;
@@ -204,12 +204,12 @@ void Accel::Impl::occluded(const Ray* rays, const std::uint32_t* masks, std::siz
       [&](std::size_t i) { blocked[i] = 0; });
   if (held != kNone) single_run(held);
   if (left.whole) {
-    queries.wide->occluded(rays, count, blocked);
+    built.queries.wide->occluded(rays, count, blocked);
     return;
   }
   if (left.rays.empty()) return;
   left.blocked.resize(left.rays.size());
-  queries.wide->occluded(left.rays.data(), left.rays.size(), left.blocked.data());
+  built.queries.wide->occluded(left.rays.data(), left.rays.size(), left.blocked.data());
   for (std::size_t k = 0; k < left.index.size(); ++k) blocked[left.index[k]] = left.blocked[k];
 }
 
@@ -217,7 +217,7 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
   for (std::size_t first = 0; first < count; first += 16) {
     const std::size_t n = std::min<std::size_t>(16, count - first);
     std::vector<Hit>* lanes = out + first;
-    if (!queries.stream.every_hit_packets || !as_packet(queries.stream, rays + first, n, false)) {
+    if (!built.queries.stream.every_hit_packets || !as_packet(built.queries.stream, rays + first, n, false)) {
       for (std::size_t i = 0; i < n; ++i) all_hits(rays[first + i], kMaskAll, lanes[i]);
       continue;
     }
@@ -225,10 +225,10 @@ void Accel::Impl::all_hits(const Ray* rays, std::size_t count, std::vector<Hit>*
     volley::load(p, rays + first, 16);
     std::size_t before[16];
     for (int i = 0; i < 16; ++i) before[i] = lanes[i].size();
-    for (const Layer& l : layers)
+    for (const Layer& l : built.layers)
       for (const auto& engine : l.engines) {
         engine->all_hits(p, lanes);
-        if (quality == BuildQuality::high)
+        if (built.quality == BuildQuality::high)
           for (int i = 0; i < 16; ++i) drop_repeated_hits(lanes[i], before[i]);
         for (int i = 0; i < 16; ++i) {
           for (std::size_t k = before[i]; k < lanes[i].size(); ++k) attribute(lanes[i][k].prim, lanes[i][k].geom);
