@@ -46,4 +46,9 @@ Isa resolve_isa(Isa requested) {
   return requested;
 }
 
+StreamTraits stream_traits(Isa isa) {
+  const bool wide = isa == Isa::avx512 || isa == Isa::avx2;
+  return {wide, wide};
+}
+
 }  // namespace volley::simd

@@ -14,4 +14,15 @@ Isa best_isa();
 /// the best. Throws std::invalid_argument for an unsupported request or a bad VOLLEY_ISA.
 Isa resolve_isa(Isa requested);
 
+/// What the stream policy may do on an ISA, as measured there (perf/reports/rays.md):
+/// `unordered_packets`, runs whose walk needs no order (occlusion, every hit) go as packets
+/// though their directions straddle an axis plane (shadow rays); `probe_batches`, a batch
+/// call probes whether its rays share their nodes, and if so sends every run as a packet
+/// (accel/stream_plan.h).
+struct StreamTraits {
+  bool unordered_packets = false;
+  bool probe_batches = false;
+};
+StreamTraits stream_traits(Isa isa);
+
 }  // namespace volley::simd

@@ -121,13 +121,13 @@ struct Accel::Impl {
     bool packets = false;
     /// Runs of mixed octants may go as packets too: closest-hit runs when the packet shares
     /// the instances' top level (perf/reports/instances.md); runs whose walk needs no order
-    /// (occlusion, every hit) then and on AVX-512 and AVX2 (perf/reports/rays.md).
+    /// (occlusion, every hit) then and where the ISA's traits say so (simd::stream_traits).
     bool mixed_closest = false;
     bool mixed_any = false;
     /// Every-hit runs may go as packets (packets, and no instances).
     bool every_hit_packets = false;
     /// Batch calls may send runs of every octant as packets when their rays share their
-    /// nodes (Accel::Impl::batch_runs_share_nodes): on AVX-512 and AVX2, where that was measured.
+    /// nodes (Accel::Impl::batch_runs_share_nodes), where the ISA's traits say so.
     bool probe_batches = false;
   };
   /// The committed scene's entry points for the queries and forms that some scenes answer

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "accel/accel_impl.h"
+#include "simd/isa/dispatch.h"
 
 namespace volley {
 
@@ -159,9 +160,10 @@ void Accel::Impl::choose_queries() {
                                                               [](const auto& e) { return e->traces_packets(); });
                      });
   q.stream.mixed_closest = built.has_instances;
-  q.stream.mixed_any = built.has_instances || built.isa == Isa::avx512 || built.isa == Isa::avx2;
+  const simd::StreamTraits traits = simd::stream_traits(built.isa);
+  q.stream.mixed_any = built.has_instances || traits.unordered_packets;
   q.stream.every_hit_packets = q.stream.packets && !built.has_instances;
-  q.stream.probe_batches = q.stream.packets && (built.isa == Isa::avx512 || built.isa == Isa::avx2);
+  q.stream.probe_batches = q.stream.packets && traits.probe_batches;
   built.queries = q;
 }
 
