@@ -264,9 +264,9 @@ void Accel::intersect(const Ray* rays, std::size_t count, Hit* hits, const Query
   }
   if (!impl_->built.committed) throw Error("intersect: call commit() after adding geometry");
   if (count != 0 && (!rays || !hits)) throw Error("intersect: rays or hits is null (pass count of each)");
-  impl_->check_excluded("intersect", args.excluded, count);
+  const std::vector<std::uint32_t> ids = impl_->excluded_ids("intersect", args.excluded, count);
   stream_pieces("intersect", count, args.threads, [&](std::size_t b, std::size_t e) {
-    impl_->intersect_excluding(rays + b, offset(args, b), e - b, hits + b);
+    impl_->intersect_excluding(rays + b, offset(args, b), ids.data() + b, e - b, hits + b);
   });
 }
 
@@ -277,9 +277,9 @@ void Accel::occluded(const Ray* rays, std::size_t count, std::uint8_t* blocked, 
   }
   if (!impl_->built.committed) throw Error("occluded: call commit() after adding geometry");
   if (count != 0 && (!rays || !blocked)) throw Error("occluded: rays or blocked is null (pass count of each)");
-  impl_->check_excluded("occluded", args.excluded, count);
+  const std::vector<std::uint32_t> ids = impl_->excluded_ids("occluded", args.excluded, count);
   stream_pieces("occluded", count, args.threads, [&](std::size_t b, std::size_t e) {
-    impl_->occluded_excluding(rays + b, offset(args, b), e - b, blocked + b);
+    impl_->occluded_excluding(rays + b, offset(args, b), ids.data() + b, e - b, blocked + b);
   });
 }
 

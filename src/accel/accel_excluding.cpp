@@ -59,57 +59,51 @@ bool Accel::occluded_excluding(const Ray& ray, const Hit& excluded, std::uint32_
   return impl_->occluded_excluding(ray, mask, excluded);
 }
 
-namespace {
-
-/// The internal ids of a batch's excluded primitives (per thread, reused).
-std::vector<std::uint32_t>& excluded_ids() {
-  static thread_local std::vector<std::uint32_t> ids;
-  return ids;
-}
-
-}  // namespace
-
 bool Accel::Impl::excluding_stream(const QueryArguments& args, std::size_t count) const {
   if (!built.queries.wide || count < kStreamWalkRays) return false;
   if (args.masks)
     for (std::size_t i = 0; i < count; ++i)
       if (!(args.masks[i] & built.queries.wide_mask)) return false;
-  std::vector<std::uint32_t>& ids = excluded_ids();
-  ids.resize(count);
-  for (std::size_t i = 0; i < count; ++i) ids[i] = excluded_id("excluding", args.excluded[i]);
   return true;
 }
 
-void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
-                                      Hit* hits) const {
+void Accel::Impl::intersect_excluding(const Ray* rays, const QueryArguments& args, const std::uint32_t* ids,
+                                      std::size_t count, Hit* hits) const {
   if (excluding_stream(args, count)) {
     std::fill(hits, hits + count, Hit{});
-    built.queries.wide->intersect(rays, count, excluded_ids().data(), hits);
+    built.queries.wide->intersect(rays, count, ids, hits);
     for (std::size_t i = 0; i < count; ++i) attribute(hits[i].prim, hits[i].geom);
     return;
   }
   for (std::size_t i = 0; i < count; ++i)
-    hits[i] = intersect_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]);
+    hits[i] = built.queries.intersect_excluding(*this, rays[i], args.masks ? args.masks[i] : kMaskAll, ids[i],
+                                                args.excluded[i]);
 }
 
-void Accel::Impl::occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count,
-                                     std::uint8_t* blocked) const {
+void Accel::Impl::occluded_excluding(const Ray* rays, const QueryArguments& args, const std::uint32_t* ids,
+                                     std::size_t count, std::uint8_t* blocked) const {
   if (excluding_stream(args, count)) {
-    built.queries.wide->occluded(rays, count, excluded_ids().data(), blocked);
+    built.queries.wide->occluded(rays, count, ids, blocked);
     return;
   }
   for (std::size_t i = 0; i < count; ++i)
-    blocked[i] = occluded_excluding(rays[i], args.masks ? args.masks[i] : kMaskAll, args.excluded[i]) ? 1 : 0;
+    blocked[i] = built.queries.occluded_excluding(*this, rays[i], args.masks ? args.masks[i] : kMaskAll, ids[i],
+                                                  args.excluded[i])
+                     ? 1
+                     : 0;
 }
 
-void Accel::Impl::check_excluded(const char* caller, const Hit* excluded, std::size_t count) const {
+std::vector<std::uint32_t> Accel::Impl::excluded_ids(const char* caller, const Hit* excluded,
+                                                     std::size_t count) const {
+  std::vector<std::uint32_t> ids(count);
   for (std::size_t i = 0; i < count; ++i) {
     try {
-      excluded_id(caller, excluded[i]);
+      ids[i] = excluded_id(caller, excluded[i]);
     } catch (const Error& e) {
       throw Error(std::string(e.what()) + " (excluded[" + std::to_string(i) + "])");
     }
   }
+  return ids;
 }
 
 }  // namespace volley

@@ -314,15 +314,17 @@ struct Accel::Impl {
   std::uint32_t excluded_id(const char* caller, const Hit& excluded) const;
   /// excluded_id for a primitive inside an instance, or for a hit that names nothing (the error).
   std::uint32_t excluded_elsewhere(const char* caller, const Hit& excluded) const;
-  /// excluded_id of excluded[0 .. count), the index named in the error.
-  void check_excluded(const char* caller, const Hit* excluded, std::size_t count) const;
-  /// The batch forms (args.excluded not null; args.masks one per ray or null): by the
-  /// stream walk where excluding_stream says so, else ray by ray.
-  void intersect_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, Hit* hits) const;
-  void occluded_excluding(const Ray* rays, const QueryArguments& args, std::size_t count, std::uint8_t* blocked) const;
+  /// excluded_id of excluded[0 .. count), found once for a whole batch before any answer
+  /// is written; the error names the index.
+  std::vector<std::uint32_t> excluded_ids(const char* caller, const Hit* excluded, std::size_t count) const;
+  /// The batch forms (args.excluded not null, `ids` its excluded_ids; args.masks one per ray
+  /// or null): by the stream walk where excluding_stream says so, else ray by ray.
+  void intersect_excluding(const Ray* rays, const QueryArguments& args, const std::uint32_t* ids, std::size_t count,
+                           Hit* hits) const;
+  void occluded_excluding(const Ray* rays, const QueryArguments& args, const std::uint32_t* ids, std::size_t count,
+                          std::uint8_t* blocked) const;
   /// Whether an excluding batch goes to the stream walk: the scene is one wide BVH, the
-  /// batch holds at least kStreamWalkRays rays and every mask (if any) meets the BVH's;
-  /// then the rays' excluded ids are in this thread's buffer (excluding_ids, accel_excluding.cpp).
+  /// batch holds at least kStreamWalkRays rays and every mask (if any) meets the BVH's.
   bool excluding_stream(const QueryArguments& args, std::size_t count) const;
   /// The stream policy (stream.cpp): runs of 16 rays as packets where that pays, the rest
   /// by the stream walk where the scene allows it and enough are left, else one by one.
